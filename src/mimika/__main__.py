@@ -1,0 +1,3 @@
+from mimika.cli import main
+
+raise SystemExit(main())
