@@ -1,0 +1,496 @@
+"""FieldRig — seed 002's facial model: Action Units as displacement fields over space.
+
+A linear AU moves a point v by Δv = Ψ(v)·φ(v)·τ (Eq 4.1) where τ ∈ [0, 1] is the intensity,
+Ψ a unit direction whose polar angles are cubic polynomials of the position (Eq 4.3–4.5) and
+φ a sum of Gaussians (Eq 4.6–4.7). Rotation AUs (head 51–56, eyes 61–64) rotate points about a
+pivot by an angle that grows with τ, weighted by a fall-off (1 on the head, 0 below the neck).
+Because fields are functions of space, one parameter file deforms any mesh of a similar face.
+
+Parameter files (JSON, ``format: "mimika-fields"``) hold, per AU, one field per object category
+(face, eyes, teeth — seed Table 4.2). Sub-object AUs (10, 16, 18, 22, 25, 27, 28) have an
+``upper`` and a ``lower`` field; a point uses the one of the side of the mouth-corner plane it
+starts on. See ``docs/rigs.md`` for the schema.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from mimika.errors import DataError, ParameterError
+from mimika.face.head import Head
+from mimika.face.rig import Positions, Rig, split_sides
+from mimika.facs import AU_CATALOGUE, parse_au
+
+log = logging.getLogger(__name__)
+
+MIXERS = ("additive", "successive")
+#: Softness (cm) of the left/right masks used for unilateral variants.
+SIDE_SOFTNESS = 0.5
+
+
+# --- the function families (pure array functions) ----------------------------------------------
+
+
+@dataclass(frozen=True)
+class Cubic:
+    """A cubic polynomial of position: (u·A1·u)(A2·u) + u·A3·u + A4·u + c (seed Eq 4.4)."""
+
+    A1: np.ndarray  # (3, 3)
+    A2: np.ndarray  # (3,)
+    A3: np.ndarray  # (3, 3)
+    A4: np.ndarray  # (3,)
+    c: float
+
+    @classmethod
+    def from_json(cls, d: Mapping | float | None) -> Cubic:
+        if d is None or isinstance(d, int | float):
+            d = {"c": float(d or 0.0)}
+        z33, z3 = np.zeros((3, 3)), np.zeros(3)
+        return cls(
+            np.asarray(d.get("A1", z33), float).reshape(3, 3),
+            np.asarray(d.get("A2", z3), float).reshape(3),
+            np.asarray(d.get("A3", z33), float).reshape(3, 3),
+            np.asarray(d.get("A4", z3), float).reshape(3),
+            float(d.get("c", 0.0)),
+        )
+
+    def to_json(self) -> dict:
+        out: dict = {}
+        for k in ("A1", "A2", "A3", "A4"):
+            a = getattr(self, k)
+            if np.any(a):
+                out[k] = np.round(a, 8).tolist()
+        out["c"] = round(self.c, 8)
+        return out
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        """Evaluate at points ``u`` (shape (N, 3)); returns shape (N,)."""
+        out = np.full(u.shape[0], self.c)
+        if np.any(self.A1) and np.any(self.A2):
+            out += np.einsum("ni,ij,nj->n", u, self.A1, u) * (u @ self.A2)
+        if np.any(self.A3):
+            out += np.einsum("ni,ij,nj->n", u, self.A3, u)
+        if np.any(self.A4):
+            out += u @ self.A4
+        return out
+
+
+@dataclass(frozen=True)
+class Gaussian:
+    """η·exp(−(u−m)ᵀB(u−m)/2) (seed Eq 4.6)."""
+
+    eta: float
+    mean: np.ndarray  # (3,)
+    B: np.ndarray  # (3, 3) symmetric positive semi-definite
+
+    @classmethod
+    def from_json(cls, d: Mapping) -> Gaussian:
+        if not {"eta", "mean"} <= set(d) or not {"sigma", "B"} & set(d):
+            raise ValueError(f"a phi Gaussian needs eta, mean and sigma (or B); got {sorted(d)}")
+        if "sigma" in d:
+            s = np.broadcast_to(np.asarray(d["sigma"], float), (3,))
+            if np.any(s <= 0):
+                raise ValueError(f"sigma={list(s)} must be > 0")
+            B = np.diag(1.0 / s**2)
+        else:
+            B = np.asarray(d["B"], float).reshape(3, 3)
+        return cls(float(d["eta"]), np.asarray(d["mean"], float).reshape(3), B)
+
+    def to_json(self) -> dict:
+        return {"eta": round(self.eta, 8), "mean": np.round(self.mean, 6).tolist(),
+                "B": np.round(self.B, 8).tolist()}
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        d = u - self.mean
+        return self.eta * np.exp(-0.5 * np.einsum("ni,ij,nj->n", d, self.B, d))
+
+
+def direction(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """Unit vectors [cos α cos β, sin β, sin α cos β] (seed Eq 4.3), shape (N, 3)."""
+    cb = np.cos(beta)
+    return np.stack([np.cos(alpha) * cb, np.sin(beta), np.sin(alpha) * cb], axis=1)
+
+
+def angles_of(d: Sequence[float]) -> tuple[float, float]:
+    """Polar angles (α, β) of a direction vector — the inverse of :func:`direction`."""
+    x, y, z = np.asarray(d, float) / np.linalg.norm(d)
+    return float(np.arctan2(z, x)), float(np.arcsin(np.clip(y, -1, 1)))
+
+
+@dataclass(frozen=True)
+class LinearField:
+    """Ψ(v)·φ(v): the displacement of a linear AU at τ = 1.
+
+    ``mirror``: the field is defined on the subject's left half (x ≥ 0) and mirrored to the
+    right (an extension for hand-authored symmetric AUs; the x component fades smoothly to 0
+    at the midline so the two halves meet without a crease).
+    """
+
+    alpha: Cubic
+    beta: Cubic
+    gaussians: tuple[Gaussian, ...]
+    mirror: bool = False
+
+    @classmethod
+    def from_json(cls, d: Mapping) -> LinearField:
+        psi = d.get("psi", {})
+        if "direction" in psi:
+            a, b = angles_of(psi["direction"])
+            alpha, beta = Cubic.from_json({"c": a}), Cubic.from_json({"c": b})
+        else:
+            alpha, beta = Cubic.from_json(psi.get("alpha")), Cubic.from_json(psi.get("beta"))
+        gs = tuple(Gaussian.from_json(g) for g in d.get("phi", []))
+        if not gs:
+            raise ValueError("phi needs at least one Gaussian")
+        return cls(alpha, beta, gs, bool(d.get("mirror", False)))
+
+    def to_json(self) -> dict:
+        out = {"psi": {"alpha": self.alpha.to_json(), "beta": self.beta.to_json()},
+               "phi": [g.to_json() for g in self.gaussians]}
+        if self.mirror:
+            out["mirror"] = True
+        return out
+
+    def psi(self, u: np.ndarray) -> np.ndarray:
+        """Unit directions at ``u`` (N, 3)."""
+        return direction(self.alpha(u), self.beta(u))
+
+    def phi(self, u: np.ndarray) -> np.ndarray:
+        """Densities at ``u``, shape (N,)."""
+        return sum(g(u) for g in self.gaussians)
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        """Displacements at τ = 1 for points ``u`` (N, 3) in field coordinates."""
+        if not self.mirror:
+            return self.psi(u) * self.phi(u)[:, None]
+        m = u.copy()
+        m[:, 0] = np.abs(m[:, 0])
+        d = self.psi(m) * self.phi(m)[:, None]
+        d[:, 0] *= np.tanh(u[:, 0] / 0.3)
+        return d
+
+
+@dataclass(frozen=True)
+class SplitField:
+    """A sub-object AU's pair of fields, chosen by the side of the mouth-corner plane."""
+
+    upper: LinearField | None
+    lower: LinearField | None
+
+
+@dataclass(frozen=True)
+class RotationAU:
+    """A non-linear AU: rotation by τ·angle about ``axis`` through ``pivot`` (seed Eq 4.2).
+
+    ``pivot`` is a point (cm) or ``"object"`` (the object's own pivot, e.g. an eyeball centre).
+    ``falloff`` (top, bottom) in y: weight 1 above ``top``, smoothstep to 0 at ``bottom``.
+    ``vector`` instead of an axis makes it a translation (AU57/58).
+    """
+
+    axis: np.ndarray | None
+    angle: float  # radians at τ = 1
+    pivot: np.ndarray | str
+    falloff: tuple[float, float] | None
+    vector: np.ndarray | None = None
+
+    @classmethod
+    def from_json(cls, d: Mapping) -> RotationAU:
+        piv = d.get("pivot", "object")
+        fo = d.get("falloff")
+        return cls(
+            None if "axis" not in d else np.asarray(d["axis"], float) / np.linalg.norm(d["axis"]),
+            np.radians(float(d.get("angle", 0.0))),
+            piv if isinstance(piv, str) else np.asarray(piv, float),
+            None if fo is None else (float(fo["top"]), float(fo["bottom"])),
+            None if "vector" not in d else np.asarray(d["vector"], float),
+        )
+
+    def weight(self, v: np.ndarray) -> np.ndarray:
+        """φ: the smoothed step from 1 (head) to 0 (neck base), shape (N,)."""
+        if self.falloff is None:
+            return np.ones(v.shape[0])
+        top, bottom = self.falloff
+        t = np.clip((v[:, 1] - bottom) / (top - bottom), 0.0, 1.0)
+        return t * t * (3 - 2 * t)
+
+    def apply(self, v: np.ndarray, tau: float, pivot: np.ndarray | None) -> np.ndarray:
+        """Move points ``v`` (N, 3) for intensity ``tau`` (may be negative for opposites)."""
+        w = self.weight(v) * tau
+        if self.vector is not None:
+            return v + w[:, None] * self.vector
+        p = pivot if isinstance(self.pivot, str) else self.pivot
+        return rotate(v, self.axis, self.angle * w, p)
+
+
+def rotate(v: np.ndarray, axis: np.ndarray, angles: np.ndarray, pivot: np.ndarray) -> np.ndarray:
+    """Rotate points ``v`` (N, 3) about ``axis`` through ``pivot`` by per-point ``angles``."""
+    r = v - pivot
+    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    k = axis[None, :]
+    return pivot + r * c + np.cross(k, r) * s + k * (r @ axis)[:, None] * (1 - c)
+
+
+# --- parameter files ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FieldSet:
+    """Parsed parameters of every AU: what a ``fields.json`` holds."""
+
+    origin: np.ndarray  # field coordinates u = (v − origin) / scale
+    scale: float
+    split_point: np.ndarray  # the mouth-corner plane (head coordinates)
+    split_normal: np.ndarray  # points toward the upper half
+    linear: dict[str, dict[str, LinearField | SplitField]]  # AU → category → field
+    rotations: dict[str, tuple[RotationAU, tuple[str, ...]]]  # AU → (rotation, categories)
+    mixers: dict[str, str]
+    source: str = "<memory>"
+
+    @property
+    def aus(self) -> tuple[str, ...]:
+        codes = set(self.linear) | set(self.rotations)
+        return tuple(c for c in AU_CATALOGUE if c in codes)
+
+    def to_u(self, v: np.ndarray) -> np.ndarray:
+        return (np.asarray(v, float) - self.origin) / self.scale
+
+
+def _field_from_json(d: Mapping) -> LinearField | SplitField:
+    if "upper" in d or "lower" in d:
+        up, lo = d.get("upper"), d.get("lower")
+        return SplitField(
+            None if up is None else LinearField.from_json(up),
+            None if lo is None else LinearField.from_json(lo),
+        )
+    return LinearField.from_json(d)
+
+
+def parse_fields(data: Mapping, *, source: str = "<memory>") -> FieldSet:
+    """Validate and parse a fields document; errors name ``source`` and the JSON path."""
+    if data.get("format") != "mimika-fields":
+        raise DataError(f"{source}: not a mimika fields file (expected \"format\": "
+                        f"\"mimika-fields\")")
+    if int(data.get("version", 0)) != 1:
+        raise DataError(f"{source}: fields version {data.get('version')!r} is not supported "
+                        f"(this mimika reads version 1)")
+    linear: dict[str, dict] = {}
+    rotations: dict[str, tuple] = {}
+    mixers: dict[str, str] = {}
+    for key, spec in data.get("aus", {}).items():
+        where = f"{source}: aus.{key}"
+        try:
+            code = parse_au(key)
+        except ParameterError as e:
+            raise DataError(f"{where}: {e}") from None
+        try:
+            kind = spec.get("kind", "linear")
+            if kind == "linear":
+                linear[code] = {cat: _field_from_json(f) for cat, f in spec["objects"].items()}
+            elif kind in ("rotation", "translation"):
+                rotations[code] = (RotationAU.from_json(spec), tuple(spec["objects"]))
+            else:
+                raise ValueError(f"kind {kind!r} must be linear, rotation or translation")
+            mixer = spec.get("mixer", "additive" if kind == "linear" else "successive")
+            if mixer not in MIXERS:
+                raise ValueError(f"mixer {mixer!r} must be one of {MIXERS}")
+            mixers[code] = mixer
+        except (KeyError, ValueError, TypeError) as e:
+            msg = f"missing key {e}" if isinstance(e, KeyError) else str(e)
+            raise DataError(f"{where}: {msg}") from None
+    frame = data.get("frame", {})
+    split = data.get("split", {"point": [0, 0, 0], "normal": [0, 1, 0]})
+    n = np.asarray(split["normal"], float)
+    return FieldSet(
+        origin=np.asarray(frame.get("origin", [0, 0, 0]), float),
+        scale=float(frame.get("scale", 1.0)),
+        split_point=np.asarray(split["point"], float),
+        split_normal=n / np.linalg.norm(n),
+        linear=linear,
+        rotations=rotations,
+        mixers=mixers,
+        source=source,
+    )
+
+
+def load_fields(path: str | Path | None = None) -> FieldSet:
+    """Read a fields file; ``None`` loads the built-in head's fields shipped with mimika."""
+    if path is None:
+        res = resources.files("mimika.face").joinpath("data/builtin_fields.json")
+        return parse_fields(json.loads(res.read_text("utf-8")), source="builtin_fields.json")
+    p = Path(path)
+    try:
+        text = p.read_text("utf-8")
+    except OSError as e:
+        raise DataError(f"cannot read fields file {p}: {e.strerror}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise DataError(f"{p}:{e.lineno}:{e.colno}: invalid JSON: {e.msg}") from None
+    return parse_fields(data, source=str(p))
+
+
+# --- the rig -----------------------------------------------------------------------------------
+
+
+class FieldRig(Rig):
+    """Seed 002's AU model on any head.
+
+    Parameters
+    ----------
+    head : Head
+    fields : FieldSet
+    mixers : dict, optional
+        Per-AU override of the mixer (``"additive"`` or ``"successive"``).
+    order : sequence of AU codes, optional
+        Order of successive AUs (default: linear AUs, then eye rotations, then head motion —
+        seed 002's default: each object's own AUs first, whole-head AUs last).
+
+    Additive AUs are evaluated on the rest mesh and summed (order-free); successive AUs are
+    then applied one after another to the already deformed mesh, in ``order``.
+    """
+
+    def __init__(
+        self,
+        head: Head,
+        fields: FieldSet,
+        *,
+        mixers: Mapping[str, str] | None = None,
+        order: Sequence[str] | None = None,
+    ) -> None:
+        self.head = head
+        self.fields = fields
+        self.mixers = dict(fields.mixers)
+        for code, m in (mixers or {}).items():
+            c = parse_au(code)
+            if m not in MIXERS:
+                raise ParameterError(f"mixer for {c} is {m!r}; use one of {', '.join(MIXERS)}")
+            if c not in self.mixers:
+                raise ParameterError(f"{c} is not modelled by these fields")
+            if c in fields.rotations and m == "additive":
+                raise ParameterError(f"{c} is a rotation: it can only be mixed successively")
+            self.mixers[c] = m
+        self.order = self._order(order)
+
+    # -- what it models
+    @property
+    def supported(self) -> tuple[str, ...]:
+        out: list[str] = []
+        for c in self.fields.aus:
+            out.append(c)
+            if AU_CATALOGUE[c].sided:
+                out += [c + "L", c + "R"]
+        return tuple(out)
+
+    def _order(self, order: Sequence[str] | None) -> tuple[str, ...]:
+        default = [c for c in self.fields.aus if c in self.fields.linear]
+        default += [c for c in self.fields.aus if c in self.fields.rotations and
+                    AU_CATALOGUE[c].group == "eyes"]
+        default += [c for c in self.fields.aus if c in self.fields.rotations and
+                    AU_CATALOGUE[c].group != "eyes"]
+        if order is None:
+            return tuple(default)
+        given = [parse_au(c) for c in order]
+        unknown = [c for c in given if c not in default]
+        if unknown:
+            raise ParameterError(f"order names AUs these fields do not model: {unknown}")
+        return tuple(given + [c for c in default if c not in given])
+
+    # -- cached per-object data (derived from the rest mesh; read-only)
+    @cached_property
+    def _upper(self) -> dict[str, np.ndarray]:
+        """Per object: which vertices start above the mouth-corner plane (seed §4.3.2).
+
+        Rigid objects (eyes, teeth) are classified as a whole by their centroid.
+        """
+        f = self.fields
+        out = {}
+        for o in self.head.objects:
+            v = o.vertices if o.category == "face" else o.vertices.mean(0, keepdims=True)
+            side = (v - f.split_point) @ f.split_normal > 0
+            out[o.name] = np.broadcast_to(side, (o.n_vertices,)) if o.category != "face" else side
+        return out
+
+    def _side_mask(self, v: np.ndarray, side: str | None) -> np.ndarray | None:
+        if side is None:
+            return None
+        x = (v[:, 0] - self.fields.origin[0]) / SIDE_SOFTNESS
+        return 0.5 * (1 + np.tanh(x if side == "L" else -x))
+
+    def field_at(self, code: str, name: str, v: np.ndarray) -> np.ndarray:
+        """Displacement at τ = 1 of linear AU ``code`` for points ``v`` (N, 3) of object
+        ``name`` (its category selects the field; its rest sides select sub-object halves)."""
+        obj = self.head[name]
+        f = self.fields.linear[code].get(obj.category)
+        out = np.zeros((v.shape[0], 3))
+        if f is None:
+            return out
+        u = self.fields.to_u(v)
+        if isinstance(f, LinearField):
+            out[:] = f(u)
+        else:
+            up = self._upper[name]
+            for half, sel in ((f.upper, up), (f.lower, ~up)):
+                if half is not None and sel.any():
+                    out[sel] = half(u[sel])
+        return out * self.fields.scale
+
+    @cached_property
+    def _basis(self) -> dict[str, dict[str, np.ndarray]]:
+        """Per linear AU and object: Δ at τ = 1 on the rest mesh (float32, read-only)."""
+        out: dict[str, dict[str, np.ndarray]] = {}
+        for code in self.fields.linear:
+            per = {}
+            for o in self.head.objects:
+                if o.category in self.fields.linear[code]:
+                    d = self.field_at(code, o.name, o.vertices).astype(np.float32)
+                    d.setflags(write=False)
+                    per[o.name] = d
+            out[code] = per
+        return out
+
+    # -- deformation
+    def deform(self, aus: Mapping[str, float]) -> Positions:
+        vals = self.check(aus)
+        sides = split_sides(vals)
+        pos = {o.name: o.vertices.astype(np.float32, copy=True) for o in self.head.objects}
+        # 1. additive linear AUs: Δ evaluated on the rest mesh, summed
+        for code, (tl, tr) in sides.items():
+            if code in self.fields.linear and self.mixers[code] == "additive":
+                for name, d in self._basis[code].items():
+                    pos[name] += self._sided(d, self.head[name].vertices, tl, tr)
+        # 2. successive AUs in order, on the deformed mesh
+        for code in self.order:
+            if code not in sides or self.mixers[code] != "successive":
+                continue
+            tl, tr = sides[code]
+            if code in self.fields.linear:
+                for name in self._basis[code]:
+                    d = self.field_at(code, name, pos[name])
+                    pos[name] += self._sided(d, self.head[name].vertices, tl, tr).astype(
+                        np.float32)
+            else:
+                rot, cats = self.fields.rotations[code]
+                tau = sides[code][0]
+                for o in self.head.objects:
+                    if o.category in cats:
+                        pos[o.name] = rot.apply(pos[o.name], tau, o.pivot).astype(np.float32)
+        return pos
+
+    def _sided(self, d: np.ndarray, rest: np.ndarray, tl: float, tr: float) -> np.ndarray:
+        if tl == tr:
+            return d * tl
+        ml = self._side_mask(rest, "L")
+        return d * (tl * ml + tr * (1 - ml))[:, None]
+
+
+def load_field_rig(head: Head, path: str | Path | None = None, **kwargs) -> FieldRig:
+    """A :class:`FieldRig` on ``head`` with fields from ``path`` (default: built-in fields)."""
+    return FieldRig(head, load_fields(path), **kwargs)

@@ -1,0 +1,79 @@
+"""The heads mimika can animate, by name or path: ``builtin``, ``ict``, an ICT folder, an OBJ."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from mimika.errors import DataError
+from mimika.face.head import Head
+from mimika.face.rig import Rig
+
+
+@dataclass(frozen=True)
+class HeadInfo:
+    name: str
+    rig: str
+    available: bool
+    description: str
+
+
+def list_heads() -> list[HeadInfo]:
+    """The named heads and whether they can be loaded here."""
+    from mimika.face.ict import find_ict_dir
+
+    try:
+        ict_dir = str(find_ict_dir())
+        ict_ok = True
+    except DataError:
+        ict_dir, ict_ok = "not found: set MIMIKA_ICT_DIR (see 'mimika pose --head ict')", False
+    return [
+        HeadInfo("builtin", "FieldRig", True,
+                 "mimika's own procedural head (the default): seed 002 displacement fields"),
+        HeadInfo("ict", "BlendshapeRig", ict_ok,
+                 f"ICT Face Model Light, light-stage scan shapes (MIT) — {ict_dir}"),
+    ]
+
+
+def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None = None,
+              resolution: int = 1) -> tuple[Head, Rig]:
+    """Return ``(head, rig)`` for ``spec``.
+
+    ``builtin`` — the procedural head with its FieldRig (``fields`` overrides its parameters);
+    ``ict`` — the ICT Face Model from ``MIMIKA_ICT_DIR`` with its BlendshapeRig; a directory —
+    an ICT-FaceKit checkout; an ``.obj`` file — a face mesh in mimika's frame (cm, y up,
+    facing +z) driven by the built-in fields (AUs are fields over space, so any similar face
+    mesh deforms).
+    """
+    s = str(spec)
+    if s == "builtin":
+        from mimika.face.builtin import build_builtin_head
+        from mimika.face.field import load_field_rig
+
+        head = build_builtin_head(resolution)
+        return head, load_field_rig(head, fields)
+    if s == "ict" or Path(s).is_dir():
+        from mimika.face.blendshape import load_ict_rig
+
+        if fields is not None:
+            from mimika.face.field import load_field_rig
+            from mimika.face.ict import load_ict_head
+
+            head = load_ict_head(None if s == "ict" else s)
+            return head, load_field_rig(head, fields)
+        rig = load_ict_rig(None if s == "ict" else s)
+        return rig.head, rig
+    p = Path(s)
+    if p.suffix.lower() == ".obj":
+        if not p.is_file():
+            raise DataError(f"mesh file {p} does not exist")
+        from mimika.face.field import load_field_rig
+        from mimika.face.meshhead import head_from_obj
+
+        head = head_from_obj(p)
+        return head, load_field_rig(head, fields)
+    raise DataError(
+        f"unknown head {s!r}: use 'builtin', 'ict', an ICT-FaceKit folder or an .obj file "
+        "(run 'mimika heads')"
+    )
