@@ -186,3 +186,21 @@ def test_bad_fields_files(tmp_path):
         rig.deform({"AU01": 2})
     json.dumps(LinearField((c := Cubic.from_json(0)), c, (Gaussian.from_json(
         {"eta": 1, "mean": [0, 0, 0], "sigma": 1}),)).to_json())
+
+
+def test_deform_batch_matches_deform(rng):
+    fs = parse_fields(doc({
+        "AU01": {"objects": {"face": UP}},
+        "AU02": {"objects": {"face": RIGHTWARD}, "mixer": "successive"},
+        "AU12": {"objects": {"face": {"mirror": True, **UP}}},
+        "AU61": {"kind": "rotation", "axis": [0, 1, 0], "angle": 30, "objects": ["eyes"]},
+    }))
+    rig = FieldRig(grid_head(), fs)
+    chans = ["AU01", "AU02", "AU12L", "AU61"]
+    vals = rng.uniform(0, 1, (6, 4)).astype(np.float32)
+    vals[2] = [0.5, 0, 0.3, 0]
+    batch = rig.deform_batch(vals, chans)
+    for t in range(6):
+        one = rig.deform(dict(zip(chans, vals[t].tolist(), strict=True)))
+        for name in one:
+            np.testing.assert_allclose(batch[name][t], one[name], atol=1e-5)

@@ -58,12 +58,12 @@ def _progress(quiet: bool, label: str):
 
 
 def cmd_aus(args: argparse.Namespace) -> int:
+    from mimika.face.blendshape import load_table
     from mimika.face.field import load_fields
-    from mimika.face.ict_table import ict_supported
     from mimika.facs import AU_CATALOGUE
 
     builtin = set(load_fields().aus)
-    ict = set(ict_supported())
+    ict = set(load_table()["aus"])
     rows = []
     for code, au in AU_CATALOGUE.items():
         if args.modelled and code not in builtin | ict:
@@ -108,14 +108,14 @@ def cmd_pose(args: argparse.Namespace) -> int:
 
     if not args.output.lower().endswith(".png"):
         raise ParameterError(f"output {args.output!r} must be a .png file")
+    if args.grid and args.au:
+        raise ParameterError("--grid renders every AU; do not combine it with --au")
+    aus = parse_au_values(args.au or [])
     _, rig = load_head(args.head, fields=args.fields)
     if args.grid:
-        if args.au:
-            raise ParameterError("--grid renders every AU; do not combine it with --au")
         img = au_sheet(head=rig, view=args.view, columns=args.columns,
                        progress=_progress(args.quiet, "rendering AUs"))
     else:
-        aus = parse_au_values(args.au or [])
         img = render_pose(aus, head=rig, view=args.view, size=args.size, samples=args.samples)
     save_png(img, args.output)
     if not args.quiet:

@@ -484,6 +484,33 @@ class FieldRig(Rig):
                         pos[o.name] = rot.apply(pos[o.name], tau, o.pivot).astype(np.float32)
         return pos
 
+    def deform_batch(self, values: np.ndarray, channels: Sequence[str]) -> dict[str, np.ndarray]:
+        """Vectorised :meth:`deform` for frames ``values`` (T, K): one matrix product for the
+        additive AUs, then the successive ones frame by frame (only where active)."""
+        values = np.asarray(values, np.float32)
+        chans = [parse_au(c) for c in channels]
+        self.check(dict.fromkeys(chans, 0.0))
+        additive = [j for j, c in enumerate(chans)
+                    if c[:4] in self.fields.linear and self.mixers[c[:4]] == "additive"]
+        out = {}
+        for o in self.head.objects:
+            basis = np.zeros((len(additive), o.n_vertices * 3), np.float32)
+            for row, j in enumerate(additive):
+                d = self._basis[chans[j][:4]].get(o.name)
+                if d is not None:
+                    side = chans[j][4:]
+                    m = 1.0 if not side else self._side_mask(o.vertices, side)[:, None]
+                    basis[row] = (d * m).ravel()
+            flat = values[:, additive] @ basis + o.vertices.ravel()
+            out[o.name] = flat.reshape(len(values), o.n_vertices, 3)
+        rest = [j for j in range(len(chans)) if j not in additive]
+        for t in np.nonzero(np.any(values[:, rest] != 0, axis=1))[0] if rest else []:
+            frame = {chans[j]: float(values[t, j]) for j in range(len(chans))}
+            pos = self.deform(frame)
+            for name in out:
+                out[name][t] = pos[name]
+        return out
+
     def _sided(self, d: np.ndarray, rest: np.ndarray, tl: float, tr: float) -> np.ndarray:
         if tl == tr:
             return d * tl

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -55,6 +55,14 @@ class Rig(ABC):
         """Deformed positions for every frame of ``track``."""
         for i in range(track.n_frames):
             yield self.deform(track.frame(i))
+
+    def deform_batch(self, values: np.ndarray, channels: Sequence[str]) -> dict[str, np.ndarray]:
+        """Positions for many frames at once: ``values`` (T, K) → {object: (T, N, 3)}.
+
+        Rigs override this with a vectorised version; this one loops over :meth:`deform`.
+        """
+        frames = [self.deform(dict(zip(channels, row, strict=True))) for row in values]
+        return {o.name: np.stack([f[o.name] for f in frames]) for o in self.head.objects}
 
 
 def split_sides(aus: Mapping[str, float]) -> dict[str, tuple[float, float]]:

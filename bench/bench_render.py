@@ -1,0 +1,36 @@
+"""Render frames/s at 640×480 on the CPU (Mesa llvmpipe) — targets: built-in ≥ 60, ICT ≥ 30.
+
+Run: ``MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/bench_render.py``
+Times a full frame: AU → vertices, normals, upload, draw with 4× MSAA, read back to RGB.
+"""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+import numpy as np
+
+from _common import ict_available, rate, report
+from mimika.face.heads import load_head
+from mimika.render import Renderer
+
+
+def bench(name: str, target: float) -> None:
+    head, rig = load_head(name)
+    t = np.linspace(0, 1, 50)
+    frames = [rig.deform({"AU12": float(x), "AU25": float(x) / 2, "AU51": float(x) / 3})
+              for x in 0.5 - 0.5 * np.cos(2 * np.pi * t)]
+    print(f"{name}: {head.n_triangles} triangles")
+    for samples in (4, 0):
+        with Renderer(head, size=(640, 480), samples=samples) as r:
+            it = iter(range(10**9))
+            fps = rate(lambda r=r, it=it: r.render(frames[next(it) % 50]), min_time=2.0)
+        report(f"  {name} render 640x480 samples={samples}", fps, "frames/s", target)
+
+
+if __name__ == "__main__":
+    bench("builtin", 60)
+    if ict_available():
+        bench("ict", 30)
+    else:
+        print("ict: skipped (set MIMIKA_ICT_DIR)")
