@@ -1,0 +1,52 @@
+"""``mimika pose``: a still image of AU intensities, or a contact sheet of every AU."""
+
+from __future__ import annotations
+
+import argparse
+
+from mimika.commands._util import progress_bar, size_arg
+from mimika.errors import ParameterError
+
+VIEWS = ("front", "three-quarter", "profile")
+
+
+def cmd_pose(args: argparse.Namespace) -> int:
+    from mimika.face.heads import load_head
+    from mimika.facs import parse_au_values
+    from mimika.pose import au_sheet, render_pose
+    from mimika.render import save_png
+
+    if not args.output.lower().endswith(".png"):
+        raise ParameterError(f"output {args.output!r} must be a .png file")
+    if args.grid and args.au:
+        raise ParameterError("--grid renders every AU; do not combine it with --au")
+    aus = parse_au_values(args.au or [])
+    _, rig = load_head(args.head, fields=args.fields)
+    if args.grid:
+        img = au_sheet(head=rig, view=args.view, columns=args.columns,
+                       progress=progress_bar(args.quiet, "rendering AUs"))
+    else:
+        img = render_pose(aus, head=rig, view=args.view, size=args.size, samples=args.samples)
+    save_png(img, args.output)
+    if not args.quiet:
+        print(f"wrote {args.output} ({img.shape[1]}x{img.shape[0]})")
+    return 0
+
+
+def register(sub) -> None:
+    q = sub.add_parser("pose", help="render a still image of AU intensities (or --grid: all AUs)")
+    q.add_argument("--au", action="append", metavar="AU=VALUE",
+                   help="an AU and its intensity in [0, 1] or A–E, e.g. AU12=1 (repeatable)")
+    q.add_argument("--head", default="builtin",
+                   help="builtin (default), ict, an ICT-FaceKit folder or an .obj face mesh")
+    q.add_argument("--fields", help="AU field parameters (JSON) for a FieldRig head")
+    q.add_argument("--view", default="front", choices=VIEWS)
+    q.add_argument("--size", type=size_arg, default=(640, 480), help="WIDTHxHEIGHT (640x480)")
+    q.add_argument("--samples", type=int, default=4, choices=(0, 2, 4, 8),
+                   help="multisample anti-aliasing samples")
+    q.add_argument("--grid", action="store_true",
+                   help="a labelled contact sheet: one tile per modelled AU at full intensity")
+    q.add_argument("--columns", type=int, default=8, help="tiles per row for --grid")
+    q.add_argument("-o", "--output", required=True, help="PNG file to write")
+    q.add_argument("-q", "--quiet", action="store_true")
+    q.set_defaults(func=cmd_pose)
