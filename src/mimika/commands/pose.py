@@ -18,9 +18,17 @@ def cmd_pose(args: argparse.Namespace) -> int:
 
     if not args.output.lower().endswith(".png"):
         raise ParameterError(f"output {args.output!r} must be a .png file")
-    if args.grid and args.au:
-        raise ParameterError("--grid renders every AU; do not combine it with --au")
-    aus = parse_au_values(args.au or [])
+    if args.grid and (args.au or args.expression):
+        raise ParameterError("--grid renders every AU; do not combine it with --au/--expression")
+    aus: dict[str, float] = {}
+    if args.expression:
+        from mimika.knowledge.expressions import expression_aus
+
+        aus = expression_aus(args.expression, args.intensity)
+    elif args.intensity != 1.0:
+        raise ParameterError("--intensity scales an --expression; give one with it")
+    for code, value in parse_au_values(args.au or []).items():
+        aus[code] = value  # explicit AUs override the expression's
     _, rig = load_head(args.head, fields=args.fields)
     if args.grid:
         img = au_sheet(head=rig, view=args.view, columns=args.columns,
@@ -37,6 +45,10 @@ def register(sub) -> None:
     q = sub.add_parser("pose", help="render a still image of AU intensities (or --grid: all AUs)")
     q.add_argument("--au", action="append", metavar="AU=VALUE",
                    help="an AU and its intensity in [0, 1] or A–E, e.g. AU12=1 (repeatable)")
+    q.add_argument("--expression", metavar="NAME",
+                   help="a named expression from the library (see 'mimika expressions')")
+    q.add_argument("--intensity", type=float, default=1.0,
+                   help="scale of the --expression's AUs, in [0, 1] (default 1)")
     q.add_argument("--head", default="builtin",
                    help="builtin (default), ict, an ICT-FaceKit folder or an .obj face mesh")
     q.add_argument("--fields", help="AU field parameters (JSON) for a FieldRig head")
