@@ -1,0 +1,39 @@
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+
+def ict_dir() -> Path | None:
+    d = os.environ.get("MIMIKA_ICT_DIR")
+    return Path(d) if d and Path(d).exists() else None
+
+
+needs_ict = pytest.mark.skipif(ict_dir() is None, reason="MIMIKA_ICT_DIR not set: no ICT data")
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(1234)
+
+
+@pytest.fixture(scope="session")
+def builtin_rig():
+    from mimika.face.heads import load_head
+
+    return load_head("builtin")[1]
+
+
+@pytest.fixture(scope="session")
+def ict_rig():
+    if ict_dir() is None:
+        pytest.skip("MIMIKA_ICT_DIR not set: no ICT data")
+    from mimika.face.heads import load_head
+
+    return load_head("ict")[1]
+
+
+@pytest.fixture(scope="session", params=["builtin", pytest.param("ict", marks=pytest.mark.ict)])
+def any_rig(request):
+    return request.getfixturevalue(f"{request.param}_rig")
