@@ -1,0 +1,106 @@
+"""Audio helpers: WAV I/O with the stdlib ``wave`` module, validation, resampling, envelopes."""
+
+from __future__ import annotations
+
+import io
+import os
+import wave
+from pathlib import Path
+
+import numpy as np
+
+from mimika.errors import DataError, ParameterError
+from mimika.speech.utterance import _write_atomic
+
+
+def valid_audio(audio: np.ndarray, *, sr: float) -> np.ndarray:
+    """Return ``audio`` as float32 mono, shape (n_samples,); raise ``ParameterError`` when it is
+    not 1-D, not finite or ``sr`` is not positive."""
+    a = np.asarray(audio)
+    if not np.issubdtype(a.dtype, np.number):
+        raise ParameterError(f"audio must be numeric, got dtype {a.dtype}")
+    if a.ndim != 1:
+        raise ParameterError(f"audio must be mono, shape (n_samples,), got shape {a.shape}")
+    if np.issubdtype(a.dtype, np.integer):
+        a = a.astype(np.float32) / float(np.iinfo(a.dtype).max + 1)
+    a = a.astype(np.float32, copy=False)
+    if not np.all(np.isfinite(a)):
+        raise ParameterError("audio contains NaN or infinity")
+    if not (np.isfinite(sr) and sr > 0):
+        raise ParameterError(f"sr={sr!r} must be > 0 Hz")
+    return a
+
+
+def resample(audio: np.ndarray, *, orig_sr: int, target_sr: int) -> np.ndarray:
+    """Polyphase resampling (scipy) of mono float audio from ``orig_sr`` to ``target_sr`` Hz."""
+    from math import gcd
+
+    from scipy.signal import resample_poly
+
+    if orig_sr == target_sr:
+        return np.asarray(audio, np.float32)
+    g = gcd(int(orig_sr), int(target_sr))
+    return resample_poly(audio, int(target_sr) // g, int(orig_sr) // g).astype(np.float32)
+
+
+def write_wav(path: str | os.PathLike, audio: np.ndarray, *, sr: int) -> None:
+    """Write mono float audio in [-1, 1] as 16-bit PCM WAV (atomically)."""
+    a = valid_audio(audio, sr=sr)
+    pcm = (np.clip(a, -1.0, 1.0) * 32767.0).round().astype("<i2")
+    buf = io.BytesIO()
+    with wave.open(buf, "wb") as w:
+        w.setnchannels(1)
+        w.setsampwidth(2)
+        w.setframerate(int(sr))
+        w.writeframes(pcm.tobytes())
+    _write_atomic(path, buf.getvalue())
+
+
+def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
+    """Read a PCM WAV (8/16/24/32-bit, any channels, mixed to mono).
+
+    Returns ``(audio, sr)``: float32 shape (n_samples,) in [-1, 1] and the rate in Hz.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise DataError(f"audio file {str(p)!r} does not exist")
+    try:
+        with wave.open(str(p), "rb") as w:
+            n_ch, width, sr = w.getnchannels(), w.getsampwidth(), w.getframerate()
+            raw = w.readframes(w.getnframes())
+    except (wave.Error, EOFError) as e:
+        raise DataError(
+            f"cannot read {str(p)!r} as PCM WAV ({e}); convert it, e.g. "
+            f"'ffmpeg -i IN -ac 1 -c:a pcm_s16le OUT.wav'"
+        ) from None
+    if width == 1:
+        a = (np.frombuffer(raw, np.uint8).astype(np.float32) - 128.0) / 128.0
+    elif width == 2:
+        a = np.frombuffer(raw, "<i2").astype(np.float32) / 32768.0
+    elif width == 3:
+        b = np.frombuffer(raw, np.uint8).reshape(-1, 3).astype(np.int32)
+        v = b[:, 0] | (b[:, 1] << 8) | (b[:, 2] << 16)
+        v = np.where(v >= 1 << 23, v - (1 << 24), v)
+        a = v.astype(np.float32) / float(1 << 23)
+    elif width == 4:
+        a = np.frombuffer(raw, "<i4").astype(np.float32) / float(1 << 31)
+    else:
+        raise DataError(f"{str(p)!r}: unsupported sample width {width} bytes")
+    a = a.reshape(-1, n_ch).mean(axis=1).astype(np.float32)
+    if a.size == 0:
+        raise DataError(f"audio file {str(p)!r} holds no samples")
+    return a, int(sr)
+
+
+def rms_envelope(audio: np.ndarray, *, sr: int, fps: float, n_frames: int | None = None
+                 ) -> np.ndarray:
+    """RMS of ``audio`` in a window of ``1/fps`` s centred on each frame time; shape (n_frames,)."""
+    a = valid_audio(audio, sr=sr)
+    n = n_frames if n_frames is not None else int(np.ceil(len(a) / sr * fps))
+    half = max(1, int(sr / fps / 2))
+    c = np.concatenate([[0.0], np.cumsum(a.astype(np.float64) ** 2)])
+    centres = (np.arange(n) / fps * sr).astype(int)
+    lo = np.clip(centres - half, 0, len(a))
+    hi = np.clip(centres + half, 0, len(a))
+    e = (c[hi] - c[lo]) / np.maximum(hi - lo, 1)
+    return np.sqrt(e).astype(np.float32)

@@ -1,0 +1,187 @@
+"""Text → sentences → speech audio with phoneme, word and sentence timing (espeak-ng).
+
+Each sentence is synthesised on its own (offline, as seed 004 §4.2 does, so that the viseme
+layer can look ahead) and the results are concatenated.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+
+import numpy as np
+
+from mimika.errors import ParameterError
+from mimika.speech.utterance import Phone, Sentence, Utterance, Word
+
+log = logging.getLogger(__name__)
+
+#: abbreviations that end with a dot but do not end a sentence (lower case, without the dot)
+_ABBREV = {
+    "dr", "mr", "mrs", "ms", "prof", "st", "vs", "etc", "e.g", "i.e", "no", "nr", "fig", "approx",
+    "z.b", "bzw", "usw", "ca", "vgl", "hr", "fr", "str", "d.h", "u.a", "inż", "np", "ok",
+    "tzn", "wg", "ul", "itd", "itp", "tj", "jr", "sr", "co", "inc", "ltd", "a.m", "p.m",
+}
+_SENT_END = re.compile(r"[.!?…]+[\"'»”)\]]*(?=\s+|$)")
+
+
+def split_sentences(text: str) -> list[tuple[str, int]]:
+    """Split ``text`` into sentences; returns ``[(sentence, char_offset), …]``.
+
+    Breaks after ``. ! ? …`` followed by white space, except after common abbreviations
+    (``Dr.``, ``z.B.``, ``np.`` …) and single capital initials; blank lines also break.
+    """
+    out: list[tuple[str, int]] = []
+    for para in re.finditer(r"\S(?:.*?\S)?(?=\s*\n\s*\n|\s*$)", text, flags=re.S):
+        start = para.start()
+        seg = para.group(0)
+        pos = 0
+        for m in _SENT_END.finditer(seg):
+            before = seg[pos:m.start()].split()
+            last = before[-1].lower().rstrip(".") if before else ""
+            if m.group(0).startswith(".") and len(m.group(0)) == 1 and (
+                last in _ABBREV or (len(last) == 1 and last.isalpha())
+            ):
+                continue
+            piece = seg[pos:m.end()]
+            s = piece.strip()
+            if s:
+                out.append((s, start + pos + (len(piece) - len(piece.lstrip()))))
+            pos = m.end()
+        rest = seg[pos:]
+        if rest.strip():
+            out.append((rest.strip(), start + pos + (len(rest) - len(rest.lstrip()))))
+    return out
+
+
+def _strip_stress(sym: str) -> tuple[str, int]:
+    stress = 0
+    while sym and sym[0] in "',%=":
+        stress = max(stress, 2 if sym[0] == "'" else 1 if sym[0] == "," else 0)
+        sym = sym[1:]
+    return sym, stress
+
+
+def events_to_timing(events, *, n_samples: int, sr: int, text: str, t0: float = 0.0,
+                     char0: int = 0) -> tuple[list[Phone], list[Word]]:
+    """Turn raw espeak events into tiled phones and words (times offset by ``t0`` s).
+
+    ``events`` are ``(type, text_position, length, sample, payload)`` tuples as produced by
+    :func:`mimika.speech.espeak.synth`; ``char0`` is the character offset of ``text``.
+    """
+    from mimika.speech.espeak import EV_PHONEME, EV_WORD
+
+    starts: list[tuple[int, str, int]] = []
+    word_ev: list[tuple[int, int, int]] = []
+    for typ, tpos, length, sample, payload in events:
+        if typ == EV_PHONEME:
+            sym, stress = _strip_stress(str(payload))
+            if not sym or (sym.startswith("(") and sym.endswith(")")):
+                continue  # language-switch markers such as "(en)"
+            if sym.startswith("_"):
+                sym = "_"
+            starts.append((int(sample), sym, stress))
+        elif typ == EV_WORD:
+            word_ev.append((int(sample), int(tpos), int(length)))
+    starts.sort(key=lambda s: s[0])
+    bounds: list[tuple[int, int, str, int]] = []
+    prev = 0
+    if starts and starts[0][0] > 0:
+        bounds.append((0, starts[0][0], "_", 0))
+    for i, (s, sym, st) in enumerate(starts):
+        e = starts[i + 1][0] if i + 1 < len(starts) else n_samples
+        s, e = max(s, prev), min(max(e, s), n_samples)
+        if e > s:
+            if bounds and sym == "_" and bounds[-1][2] == "_":
+                bounds[-1] = (bounds[-1][0], e, "_", 0)
+            else:
+                bounds.append((s, e, sym, st))
+            prev = e
+    if bounds and bounds[-1][1] < n_samples:
+        s, _, sym, st = bounds[-1]
+        if sym == "_":
+            bounds[-1] = (s, n_samples, "_", 0)
+        else:
+            bounds.append((bounds[-1][1], n_samples, "_", 0))
+    if not bounds and n_samples > 0:
+        bounds = [(0, n_samples, "_", 0)]
+    phones = [Phone(sym, t0 + s / sr, t0 + e / sr, st) for s, e, sym, st in bounds]
+
+    words: list[Word] = []
+    for k, (sample, tpos, length) in enumerate(word_ev):
+        t_ev = t0 + sample / sr
+        t_next = t0 + (word_ev[k + 1][0] if k + 1 < len(word_ev) else n_samples) / sr
+        inside = [p for p in phones if t_ev - 0.002 <= p.start < t_next - 0.002
+                  and not p.is_pause]
+        start = inside[0].start if inside else t_ev
+        end = min(inside[-1].end, t_next) if inside else t_next
+        word_text = text[tpos - 1:tpos - 1 + length] if tpos > 0 else ""
+        words.append(Word(word_text, start, max(end, start), char0 + tpos - 1 if tpos > 0 else -1))
+    return phones, words
+
+
+def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: int = 175,
+               pitch: int = 50, volume: int = 100, ssml: bool = False) -> Utterance:
+    """Speak ``text`` with espeak-ng; return audio (float32 mono, 22 050 Hz) and timing.
+
+    Parameters
+    ----------
+    text : str
+        Plain text (split into sentences, each synthesised on its own) or, with ``ssml=True``,
+        an SSML document (``<speak>``, ``<prosody rate= pitch=>``, ``<break time=>`` … as
+        espeak-ng's SSML mode supports them), synthesised in one piece.
+    lang : str
+        espeak-ng language code: ``en``, ``en-us``, ``de``, ``pl`` … (``mimika voices``).
+    voice : str, optional
+        A variant (``f3``, ``m2``, ``klatt``), ``lang+variant``, or a voice name.
+    rate : int
+        Words per minute, 80–450 (espeak default 175).
+    pitch : int
+        Base pitch 0–100 (default 50).
+
+    Returns
+    -------
+    Utterance
+        ``audio`` shape (n_samples,), ``sr`` 22 050; phones tile the whole audio.
+    """
+    from mimika.speech import espeak
+
+    if not isinstance(text, str) or not text.strip():
+        raise ParameterError("text is empty; give at least one word to speak")
+    code = espeak.check_lang(lang)
+    pieces = [(text, 0)] if ssml else split_sentences(text)
+    if not pieces:
+        raise ParameterError("text is empty; give at least one word to speak")
+    chunks: list[np.ndarray] = []
+    phones: list[Phone] = []
+    words: list[Word] = []
+    sents: list[Sentence] = []
+    n_total = 0
+    sr = espeak.sample_rate()
+    for sent, char0 in pieces:
+        raw = espeak.synth(sent, lang=code, voice=voice, rate=rate, pitch=pitch, volume=volume,
+                           ssml=ssml)
+        sr = raw.sr
+        t0 = n_total / sr
+        ph, ws = events_to_timing(raw.events, n_samples=len(raw.audio), sr=sr, text=sent,
+                                  t0=t0, char0=char0)
+        if phones and ph and phones[-1].is_pause and ph[0].is_pause:
+            phones[-1] = Phone("_", phones[-1].start, ph[0].end)
+            ph = ph[1:]
+        phones += ph
+        words += ws
+        chunks.append(raw.audio)
+        n_total += len(raw.audio)
+        sents.append(Sentence(_plain(sent) if ssml else sent, t0, n_total / sr))
+    audio = (np.concatenate(chunks).astype(np.float32) / 32768.0) if chunks else np.zeros(0)
+    log.debug("synthesised %d sentences, %.2f s, %d phones", len(sents), n_total / sr,
+              len(phones))
+    if not any(not p.is_pause for p in phones):
+        log.warning("espeak-ng produced no phonemes for %r", text[:40])
+    return Utterance(audio.astype(np.float32), sr, phones, words, sents, lang=code, text=text,
+                     meta={"source": "espeak-ng", "voice": voice or code, "rate": rate,
+                           "pitch": pitch})
+
+
+def _plain(ssml: str) -> str:
+    return re.sub(r"\s+", " ", re.sub(r"<[^>]*>", " ", ssml)).strip()

@@ -1,0 +1,98 @@
+"""Alignment of recorded speech (TTS-independent timing) and the speech CLI."""
+
+from __future__ import annotations
+
+import difflib
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("espeakng_loader")
+
+from mimika.errors import ParameterError
+from mimika.speech import align, synthesize
+from mimika.speech.audio import resample, write_wav
+
+
+def _errors(truth, est) -> np.ndarray:
+    a = [p.symbol for p in truth.phonemes]
+    b = [p.symbol for p in est.phonemes]
+    out = []
+    for blk in difflib.SequenceMatcher(a=a, b=b, autojunk=False).get_matching_blocks():
+        for k in range(blk.size):
+            if blk.a + k and blk.b + k:
+                out.append(abs(truth.phonemes[blk.a + k].start - est.phonemes[blk.b + k].start))
+    return np.array(out)
+
+
+def test_align_degraded_speech_within_30ms():
+    rng = np.random.default_rng(0)
+    text = "The city council met on Monday to discuss the new budget."
+    rec = synthesize(text, rate=140, pitch=70)  # 0.8x rate, other pitch
+    p = np.mean(rec.audio[np.abs(rec.audio) > 1e-4] ** 2)
+    noisy = rec.audio + rng.normal(0, np.sqrt(p / 10), len(rec.audio)).astype(np.float32)
+    est = align(noisy, sr=rec.sr, transcript=text, lang="en")
+    e = _errors(rec, est)
+    assert len(e) > 30
+    assert np.median(e) <= 0.030 and est.meta["source"] == "alignment"
+    assert est.phonemes[0].start == 0 and est.phonemes[-1].end == pytest.approx(est.duration)
+
+
+def test_align_other_rate_resampled_german():
+    text = "Guten Abend, meine Damen und Herren."
+    rec = synthesize(text, lang="de", rate=220, pitch=30)
+    audio16 = resample(rec.audio, orig_sr=rec.sr, target_sr=16000)  # any input rate works
+    est = align(audio16, sr=16000, transcript=text, lang="de")
+    assert est.sr == 16000
+    assert np.median(_errors(rec, est)) <= 0.030
+
+
+def test_align_errors():
+    with pytest.raises(ParameterError, match="transcript is empty"):
+        align(np.zeros(22050, np.float32), sr=22050, transcript=" ")
+    with pytest.raises(ParameterError, match=r"at least 0\.1 s"):
+        align(np.zeros(100, np.float32), sr=22050, transcript="hello")
+    with pytest.raises(ParameterError, match="mono"):
+        align(np.zeros((100, 2)), sr=22050, transcript="hello")
+
+
+@pytest.fixture()
+def cli():
+    import mimika.cli
+
+    return mimika.cli.main
+
+
+def test_cli_say_and_align(cli, tmp_path, capsys):
+    wav, csv, vis = tmp_path / "h.wav", tmp_path / "h.csv", tmp_path / "h.json"
+    rc = cli(["say", "Guten Abend.", "--lang", "de", "-o", str(wav), "--aus", str(csv),
+              "--visemes", str(vis), "--format", "rhubarb", "--fps", "30"])
+    assert rc == 0
+    header = csv.read_text().splitlines()[0].split(",")
+    assert header[0] == "time" and header[1:4] == ["AU10", "AU12", "AU16"]
+    assert json.loads(vis.read_text())["mouthCues"][0]["value"] == "X"
+    timing = tmp_path / "t.json"
+    rc = cli(["align", str(wav), "--transcript", "Guten Abend.", "--lang", "de",
+              "-o", str(timing), "--visemes", str(tmp_path / "o.json")])
+    assert rc == 0
+    d = json.loads(timing.read_text())
+    assert d["format"] == "mimika-speech-timing" and d["phonemes"][1]["symbol"] == "g"
+    out = capsys.readouterr().out
+    assert "wrote" in out
+
+
+def test_cli_errors_exit_2(cli, tmp_path, capsys):
+    assert cli(["say", "hello", "--lang", "xx-nope", "-o", str(tmp_path / "a.wav")]) == 2
+    assert "unknown language" in capsys.readouterr().err
+    assert cli(["say", "", "-o", str(tmp_path / "a.wav")]) == 2
+    assert "text is empty" in capsys.readouterr().err
+    assert cli(["say", "hi", "-o", str(tmp_path / "a.mp3")]) == 2
+    write_wav(tmp_path / "s.wav", np.zeros(22050, np.float32), sr=22050)
+    assert cli(["align", str(tmp_path / "s.wav"), "-o", str(tmp_path / "t.json")]) == 2
+    assert "exactly one of --transcript" in capsys.readouterr().err
+
+
+def test_cli_voices(cli, capsys):
+    assert cli(["voices", "--lang", "pl"]) == 0
+    assert "Polish" in capsys.readouterr().out
