@@ -19,6 +19,7 @@ demo: setup
 	@echo "demo: wrote $(OUT)/au-sheet.png and $(OUT)/smile.png"
 
 test: setup
+	bash scripts/setup-node.sh
 	$(BIN)/ruff check src tests bench
 	$(BIN)/python -m pytest -q
 

@@ -1,0 +1,242 @@
+"""``mimika render``, ``mimika replay``, ``mimika plot`` and ``mimika project``: scripts and
+recorded takes to glTF, CSV, PNG and project files."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from mimika.commands._util import size_arg
+from mimika.errors import ParameterError
+
+CSV_FORMATS = ("au", "openface", "arkit")
+OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml")
+
+
+def _say(args, msg: str) -> None:
+    if not getattr(args, "quiet", False):
+        print(msg)
+
+
+def _load_timeline(path: str, rate: float | None = None):
+    """A script (.xml/.ssml/.txt) or a project (.json) → (timeline, settings)."""
+    from mimika.markup import load_script
+    from mimika.markup.project import DEFAULT_SETTINGS, load_project
+
+    if Path(path).suffix.lower() == ".json":
+        proj = load_project(path)
+        return proj.timeline, dict(proj.settings)
+    return load_script(path, rate=rate), dict(DEFAULT_SETTINGS)
+
+
+def _sync(args, tl):
+    from mimika.timeline import synchronise
+
+    if args.sync == "off":
+        return tl
+    res = synchronise(tl, mode=args.sync)
+    for f in res.findings:
+        if f.level != "suggestion" or args.verbose:
+            print(f"mimika: {f.level}: {f.message}", file=sys.stderr)
+    return res.timeline
+
+
+def _supported(track, rig):
+    sup = set(rig.supported)
+    drop = [c for c in track.channels if c not in sup]
+    if drop:
+        print(f"mimika: note: the {rig.head.name!r} head does not model {', '.join(drop)}; "
+              "they are left out", file=sys.stderr)
+    return track.with_channels([c for c in track.channels if c in sup])
+
+
+def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
+    out = Path(args.output)
+    ext = out.suffix.lower()
+    if ext not in OUTPUTS:
+        raise ParameterError(f"output {str(out)!r}: use one of {', '.join(OUTPUTS)}")
+    if args.format and ext != ".csv":
+        raise ParameterError("--format applies to .csv outputs only")
+    if ext == ".csv":
+        from mimika.io.tracks import write_track
+
+        write_track(track, out, format=args.format or "au")
+        _say(args, f"wrote {out} ({args.format or 'au'} CSV, {track.n_frames} frames at "
+                   f"{track.fps:g} fps, {len(track.channels)} AUs)")
+        return
+    if ext in (".xml", ".json"):
+        if timeline is None:
+            raise ParameterError(f"{ext} output needs a script or project as input")
+        if ext == ".xml":
+            from mimika.io.atomic import atomic_write
+            from mimika.markup import to_script
+
+            atomic_write(out, to_script(timeline))
+        else:
+            from mimika.markup.project import Project, save_project
+
+            s = dict(settings or {})
+            s.update({"head": args.head, "fps": float(args.fps or s.get("fps", 25.0))})
+            save_project(Project(timeline, s), out)
+        _say(args, f"wrote {out}")
+        return
+    from mimika.face.heads import load_head
+
+    _, rig = load_head(args.head, resolution=getattr(args, "resolution", 1))
+    track = _supported(track, rig)
+    if ext in (".glb", ".gltf"):
+        from mimika.io.gltf import write_gltf
+
+        write_gltf(out, rig, track)
+        _say(args, f"wrote {out} ({track.n_frames} frames, {track.duration:.2f} s, "
+                   f"{len(track.channels)} animated AUs)")
+        return
+    from mimika.render import Renderer, contact_sheet, save_png
+
+    n = max(1, min(args.frames, track.n_frames))
+    idx = [round(i * (track.n_frames - 1) / max(n - 1, 1)) for i in range(n)]
+    pos = rig.deform_batch(track.values[idx], track.channels)
+    with Renderer(rig.head, size=args.size) as r:
+        imgs = [r.render({k: v[i] for k, v in pos.items()}, view=args.view)
+                for i in range(len(idx))]
+    sheet = contact_sheet(imgs, [f"{i / track.fps:.2f} s" for i in idx], columns=args.columns,
+                          title=str(track.meta.get("source", "")) or None)
+    save_png(sheet, out)
+    _say(args, f"wrote {out} ({len(idx)} frames)")
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from mimika.timeline import sample
+
+    tl, settings = _load_timeline(args.script, rate=args.rate)
+    tl = _sync(args, tl)
+    fps = float(args.fps or settings.get("fps", 25.0))
+    track = sample(tl, fps=fps, blend=args.blend or bool(settings.get("blend")))
+    track = type(track)(track.values, track.channels, track.fps,
+                        {**track.meta, "source": args.script})
+    _write_outputs(args, track, timeline=tl, settings=settings)
+    return 0
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    from mimika.io.tracks import read_track
+
+    kw = {"fill": args.fill} if args.fill else {}
+    track = read_track(args.take, format=args.input_format, **kw)
+    if args.fps:
+        track = track.resample(fps=args.fps)
+    meta = track.meta
+    if meta.get("dropouts"):
+        print(f"mimika: note: {args.take}: {meta['dropouts']} drop-out rows filled "
+              f"({meta.get('fill', 'linear')})", file=sys.stderr)
+    _write_outputs(args, track)
+    return 0
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from mimika.timeline.plot import plot_track
+
+    src = Path(args.input)
+    if not args.output.lower().endswith(".png"):
+        raise ParameterError(f"output {args.output!r} must be a .png file")
+    if src.suffix.lower() == ".csv":
+        from mimika.io.tracks import read_track
+
+        track = read_track(src)
+    else:
+        from mimika.timeline import sample
+
+        tl, settings = _load_timeline(str(src))
+        track = sample(tl, fps=float(args.fps or settings.get("fps", 25.0)), blend=args.blend)
+    aus = [a for part in (args.aus or "").split(",") for a in [part.strip()] if a] or None
+    plot_track(track, args.output, aus=aus, title=str(src))
+    _say(args, f"wrote {args.output}")
+    return 0
+
+
+def cmd_project(args: argparse.Namespace) -> int:
+    from mimika.markup.project import Project, load_project, save_project
+
+    if args.action == "check":
+        p = load_project(args.file)
+        n = sum(len(c.events) for c in p.timeline.channels)
+        print(f"{args.file}: ok — {len(p.timeline.channels)} channels, {n} events, "
+              f"{p.timeline.end:.2f} s, head {p.settings['head']}, {p.settings['fps']:g} fps")
+        return 0
+    if not args.output:
+        raise ParameterError(f"'mimika project {args.action}' needs -o FILE")
+    if args.action == "new":
+        from mimika.markup import load_script
+        from mimika.markup.project import DEFAULT_SETTINGS
+
+        tl = load_script(args.file)
+        settings = dict(DEFAULT_SETTINGS)
+        if args.head:
+            settings["head"] = args.head
+        if args.fps:
+            settings["fps"] = float(args.fps)
+        save_project(Project(tl, settings), args.output)
+    else:  # script
+        from mimika.io.atomic import atomic_write
+        from mimika.markup import to_script
+
+        atomic_write(args.output, to_script(load_project(args.file).timeline))
+    print(f"wrote {args.output}")
+    return 0
+
+
+def _common(p, *, head: bool = True) -> None:
+    p.add_argument("-o", "--output", required=True,
+                   help="output: .glb/.gltf (animated head), .csv (--format), .png (frames), "
+                        ".json (project), .xml (script)")
+    p.add_argument("--format", choices=CSV_FORMATS,
+                   help="CSV layout: au (time,AU01,…; default), openface, arkit (Live Link Face)")
+    p.add_argument("--fps", type=float, help="frames per second (default: project or 25)")
+    if head:
+        p.add_argument("--head", default="builtin", help="builtin (default), ict, a folder or .obj")
+    p.add_argument("--view", default="front", choices=("front", "three-quarter", "profile"),
+                   help="camera for .png")
+    p.add_argument("--size", type=size_arg, default=(320, 240), help="tile size for .png")
+    p.add_argument("--frames", type=int, default=8, help="frames in a .png contact strip")
+    p.add_argument("--columns", type=int, default=8, help="tiles per row in a .png")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+
+def register(sub) -> None:
+    r = sub.add_parser("render", help="a script or project → glTF, CSV, PNG, project or script")
+    r.add_argument("script", help="script (.xml, .ssml, .txt) or project (.json)")
+    _common(r)
+    r.add_argument("--blend", action="store_true", help="apply the AU Blender (FACS rules)")
+    r.add_argument("--sync", choices=("warn", "clamp", "error", "off"), default="warn",
+                   help="knowledge-base timing rules: warn (default), clamp, error or off")
+    r.add_argument("--rate", type=float, help="seconds per vowel unit for text timing (0.16)")
+    r.add_argument("-v", "--verbose", action="store_true", help="also show suggestions")
+    r.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("replay", help="replay a recorded take (Live Link Face / OpenFace / AU "
+                       "CSV) on a head → glTF, CSV or PNG")
+    p.add_argument("take", help="the CSV take")
+    _common(p)
+    p.add_argument("--input-format", choices=CSV_FORMATS, help="override header detection")
+    p.add_argument("--fill", choices=("linear", "nearest", "hold"),
+                   help="how drop-outs are filled (default linear)")
+    p.set_defaults(func=cmd_replay)
+
+    q = sub.add_parser("plot", help="AU curves of a script, project or CSV take as a PNG")
+    q.add_argument("input", help="script, project (.json) or CSV")
+    q.add_argument("-o", "--output", required=True, help="PNG file")
+    q.add_argument("--aus", help="comma-separated AUs to draw, e.g. AU12,AU25")
+    q.add_argument("--fps", type=float)
+    q.add_argument("--blend", action="store_true")
+    q.add_argument("-q", "--quiet", action="store_true")
+    q.set_defaults(func=cmd_plot)
+
+    j = sub.add_parser("project", help="create, check or print project files")
+    j.add_argument("action", choices=("new", "check", "script"),
+                   help="new: script → project; check: validate; script: project → script")
+    j.add_argument("file", help="script (new) or project (check, script)")
+    j.add_argument("-o", "--output", help="file to write (new, script)")
+    j.add_argument("--head", help="head setting (new)")
+    j.add_argument("--fps", type=float, help="fps setting (new)")
+    j.set_defaults(func=cmd_project)
