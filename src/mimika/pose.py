@@ -60,5 +60,5 @@ def au_sheet(
             labels.append(f"{code} {AU_CATALOGUE[base_code(code)].name}" if code else "neutral")
             if progress:
                 progress(i + 1, len(codes) + 1)
-    title = f"mimika — {rig.head.name} head: every modelled Action Unit at full intensity"
+    title = f"mimika: {rig.head.name} head, every modelled Action Unit at full intensity"
     return contact_sheet(images, labels, columns=columns, title=title)

@@ -357,9 +357,10 @@ class BlendshapeRig(Rig):
         return {n: out[:, s] for n, s in self._slices.items()}
 
 
-def load_ict_rig(path: str | os.PathLike | None = None) -> BlendshapeRig:
-    """The ICT Face Model with the shipped ``ict_aus.json`` table (see :mod:`mimika.face.ict`)."""
+def load_ict_rig(path: str | os.PathLike | None = None, identity=None) -> BlendshapeRig:
+    """The ICT Face Model with the shipped ``ict_aus.json`` table (see :mod:`mimika.face.ict`);
+    ``identity``: an identity mode 0–9 or mode weights (``mimika.face.ict.identity_weights``)."""
     from mimika.face.ict import load_ict
 
-    head, shapes = load_ict(path)
+    head, shapes = load_ict(path, identity)
     return BlendshapeRig(head, shapes, load_table())

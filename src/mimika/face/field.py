@@ -113,6 +113,35 @@ class Gaussian:
         return self.eta * np.exp(-0.5 * np.einsum("ni,ij,nj->n", d, self.B, d))
 
 
+@dataclass(frozen=True)
+class Rbf:
+    """A smooth vector residual Σₖ wₖ·exp(−|u−cₖ|²/(2σ²)) (an extension: the fitted ``rich``
+    family adds it to Ψ·φ; see docs/fitting.md). centers (K, 3), weights (K, 3), σ in u units."""
+
+    centers: np.ndarray
+    weights: np.ndarray
+    sigma: float
+
+    @classmethod
+    def from_json(cls, d: Mapping) -> Rbf:
+        c = np.asarray(d["centers"], float).reshape(-1, 3)
+        w = np.asarray(d["weights"], float).reshape(-1, 3)
+        if len(c) != len(w):
+            raise ValueError(f"rbf has {len(c)} centers but {len(w)} weights")
+        if float(d["sigma"]) <= 0:
+            raise ValueError(f"rbf sigma={d['sigma']} must be > 0")
+        return cls(c, w, float(d["sigma"]))
+
+    def to_json(self) -> dict:
+        return {"sigma": round(self.sigma, 8), "centers": np.round(self.centers, 6).tolist(),
+                "weights": np.round(self.weights, 8).tolist()}
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        """Residual displacements at points ``u`` (N, 3), shape (N, 3)."""
+        d2 = ((u[:, None, :] - self.centers[None]) ** 2).sum(-1)
+        return np.exp(-0.5 * d2 / self.sigma**2) @ self.weights
+
+
 def direction(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
     """Unit vectors [cos α cos β, sin β, sin α cos β] (seed Eq 4.3), shape (N, 3)."""
     cb = np.cos(beta)
@@ -138,6 +167,7 @@ class LinearField:
     beta: Cubic
     gaussians: tuple[Gaussian, ...]
     mirror: bool = False
+    rbf: Rbf | None = None  # optional smooth residual (extension, fitted "rich" family)
 
     @classmethod
     def from_json(cls, d: Mapping) -> LinearField:
@@ -150,13 +180,16 @@ class LinearField:
         gs = tuple(Gaussian.from_json(g) for g in d.get("phi", []))
         if not gs:
             raise ValueError("phi needs at least one Gaussian")
-        return cls(alpha, beta, gs, bool(d.get("mirror", False)))
+        rbf = None if d.get("rbf") is None else Rbf.from_json(d["rbf"])
+        return cls(alpha, beta, gs, bool(d.get("mirror", False)), rbf)
 
     def to_json(self) -> dict:
         out = {"psi": {"alpha": self.alpha.to_json(), "beta": self.beta.to_json()},
                "phi": [g.to_json() for g in self.gaussians]}
         if self.mirror:
             out["mirror"] = True
+        if self.rbf is not None:
+            out["rbf"] = self.rbf.to_json()
         return out
 
     def psi(self, u: np.ndarray) -> np.ndarray:
@@ -170,20 +203,67 @@ class LinearField:
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Displacements at τ = 1 for points ``u`` (N, 3) in field coordinates."""
         if not self.mirror:
-            return self.psi(u) * self.phi(u)[:, None]
+            d = self.psi(u) * self.phi(u)[:, None]
+            return d if self.rbf is None else d + self.rbf(u)
         m = u.copy()
         m[:, 0] = np.abs(m[:, 0])
         d = self.psi(m) * self.phi(m)[:, None]
         d[:, 0] *= np.tanh(u[:, 0] / 0.3)
-        return d
+        return d if self.rbf is None else d + self.rbf(u)
 
 
 @dataclass(frozen=True)
 class SplitField:
-    """A sub-object AU's pair of fields, chosen by the side of the mouth-corner plane."""
+    """A sub-object AU's pair of fields, chosen by the side of a split surface (seed §4.3.2:
+    the plane through the mouth corners; ``split`` names which surface, default ``mouth``)."""
 
     upper: LinearField | None
     lower: LinearField | None
+    split: str = "mouth"
+
+
+@dataclass(frozen=True)
+class Split:
+    """A plane through ``point`` with ``normal`` (toward the upper half), optionally bent by a
+    ``profile``: offsets along the normal as a piecewise-linear function of |x| (cm), so the
+    surface can follow a curved lip line or lid fissure (an extension of the seed's plane).
+
+    ``soft`` = (x_in, x_out, k): outside the opening — |x| < x_in or |x| > x_out (the eye or
+    mouth corners) — the split is not a sharp cut but a blend of the two fields over a band
+    whose half-width grows by k cm per cm from the corner, so the skin stays continuous there.
+    Across the opening itself it is sharp, as in the seed.
+    """
+
+    point: np.ndarray
+    normal: np.ndarray
+    profile: np.ndarray | None = None  # shape (M, 2): |x|, offset; sorted by |x|
+    soft: tuple[float, float, float] | None = None
+
+    @classmethod
+    def from_json(cls, d: Mapping) -> Split:
+        n = np.asarray(d["normal"], float)
+        prof = d.get("profile")
+        if prof is not None:
+            prof = np.asarray(prof, float).reshape(-1, 2)
+            prof = prof[np.argsort(prof[:, 0])]
+        soft = d.get("soft")
+        return cls(np.asarray(d["point"], float), n / np.linalg.norm(n), prof,
+                   None if soft is None else tuple(float(x) for x in soft))
+
+    def upper_weight(self, v: np.ndarray) -> np.ndarray:
+        """Weight of the upper field for points (N, 3), shape (N,), in [0, 1]: 1 above the
+        split, 0 below, blended across the soft band outside the opening."""
+        s = (v - self.point) @ self.normal
+        ax = np.abs(v[:, 0] - self.point[0])
+        if self.profile is not None:
+            s = s - np.interp(ax, *self.profile.T)
+        hard = (s > 0).astype(float)
+        if self.soft is None:
+            return hard
+        x_in, x_out, k = self.soft
+        width = k * np.maximum(np.maximum(ax - x_out, x_in - ax), 0.0)
+        t = np.clip(0.5 + 0.5 * s / np.maximum(width, 1e-9), 0.0, 1.0)
+        return np.where(width > 1e-6, t * t * (3 - 2 * t), hard)
 
 
 @dataclass(frozen=True)
@@ -247,12 +327,13 @@ class FieldSet:
 
     origin: np.ndarray  # field coordinates u = (v − origin) / scale
     scale: float
-    split_point: np.ndarray  # the mouth-corner plane (head coordinates)
-    split_normal: np.ndarray  # points toward the upper half
+    splits: dict[str, Split]  # named split surfaces (head coordinates); "mouth" is the seed's
     linear: dict[str, dict[str, LinearField | SplitField]]  # AU → category → field
     rotations: dict[str, tuple[RotationAU, tuple[str, ...]]]  # AU → (rotation, categories)
     mixers: dict[str, str]
     source: str = "<memory>"
+    #: frame rotation R (3, 3): u = R·(v − origin)/scale; None = identity
+    rotation: np.ndarray | None = None
 
     @property
     def aus(self) -> tuple[str, ...]:
@@ -260,15 +341,25 @@ class FieldSet:
         return tuple(c for c in AU_CATALOGUE if c in codes)
 
     def to_u(self, v: np.ndarray) -> np.ndarray:
-        return (np.asarray(v, float) - self.origin) / self.scale
+        u = (np.asarray(v, float) - self.origin) / self.scale
+        return u if self.rotation is None else u @ self.rotation.T
+
+    def to_head(self, du: np.ndarray) -> np.ndarray:
+        """Field-frame displacements (N, 3) → head displacements (cm): scale·Rᵀ·Δu."""
+        d = du if self.rotation is None else du @ self.rotation
+        return d * self.scale
 
 
-def _field_from_json(d: Mapping) -> LinearField | SplitField:
+def _field_from_json(d: Mapping, splits: Mapping[str, Split]) -> LinearField | SplitField:
     if "upper" in d or "lower" in d:
         up, lo = d.get("upper"), d.get("lower")
+        name = d.get("split", "mouth")
+        if name not in splits:
+            raise ValueError(f"split {name!r} is not defined; defined: {sorted(splits)}")
         return SplitField(
             None if up is None else LinearField.from_json(up),
             None if lo is None else LinearField.from_json(lo),
+            name,
         )
     return LinearField.from_json(d)
 
@@ -284,6 +375,12 @@ def parse_fields(data: Mapping, *, source: str = "<memory>") -> FieldSet:
     linear: dict[str, dict] = {}
     rotations: dict[str, tuple] = {}
     mixers: dict[str, str] = {}
+    try:
+        raw = dict(data.get("splits", {}))
+        raw.setdefault("mouth", data.get("split", {"point": [0, 0, 0], "normal": [0, 1, 0]}))
+        splits = {name: Split.from_json(d) for name, d in raw.items()}
+    except (KeyError, ValueError, TypeError) as e:
+        raise DataError(f"{source}: splits: {e}") from None
     for key, spec in data.get("aus", {}).items():
         where = f"{source}: aus.{key}"
         try:
@@ -293,7 +390,8 @@ def parse_fields(data: Mapping, *, source: str = "<memory>") -> FieldSet:
         try:
             kind = spec.get("kind", "linear")
             if kind == "linear":
-                linear[code] = {cat: _field_from_json(f) for cat, f in spec["objects"].items()}
+                linear[code] = {cat: _field_from_json(f, splits)
+                                for cat, f in spec["objects"].items()}
             elif kind in ("rotation", "translation"):
                 rotations[code] = (RotationAU.from_json(spec), tuple(spec["objects"]))
             else:
@@ -306,18 +404,30 @@ def parse_fields(data: Mapping, *, source: str = "<memory>") -> FieldSet:
             msg = f"missing key {e}" if isinstance(e, KeyError) else str(e)
             raise DataError(f"{where}: {msg}") from None
     frame = data.get("frame", {})
-    split = data.get("split", {"point": [0, 0, 0], "normal": [0, 1, 0]})
-    n = np.asarray(split["normal"], float)
     return FieldSet(
         origin=np.asarray(frame.get("origin", [0, 0, 0]), float),
         scale=float(frame.get("scale", 1.0)),
-        split_point=np.asarray(split["point"], float),
-        split_normal=n / np.linalg.norm(n),
+        rotation=_frame_rotation(frame, source),
+        splits=splits,
         linear=linear,
         rotations=rotations,
         mixers=mixers,
         source=source,
     )
+
+
+def _frame_rotation(frame: Mapping, source: str) -> np.ndarray | None:
+    """``frame.rotation`` (3×3, proper orthonormal) or None when absent."""
+    if frame.get("rotation") is None:
+        return None
+    try:
+        r = np.asarray(frame["rotation"], float).reshape(3, 3)
+    except (ValueError, TypeError):
+        raise DataError(f"{source}: frame.rotation must be a 3x3 matrix") from None
+    if not np.allclose(r @ r.T, np.eye(3), atol=1e-4) or np.linalg.det(r) < 0:
+        raise DataError(f"{source}: frame.rotation must be a rotation matrix (orthonormal, "
+                        f"det +1)")
+    return r
 
 
 def load_fields(path: str | Path | None = None) -> FieldSet:
@@ -405,17 +515,19 @@ class FieldRig(Rig):
 
     # -- cached per-object data (derived from the rest mesh; read-only)
     @cached_property
-    def _upper(self) -> dict[str, np.ndarray]:
-        """Per object: which vertices start above the mouth-corner plane (seed §4.3.2).
-
-        Rigid objects (eyes, teeth) are classified as a whole by their centroid.
-        """
-        f = self.fields
+    def _upper(self) -> dict[tuple[str, str], np.ndarray]:
+        """Per (split, object): weight of the upper field for each vertex, from the side it
+        starts on (seed §4.3.2). Rigid objects (eyes, teeth) go whole, by their centroid."""
         out = {}
-        for o in self.head.objects:
-            v = o.vertices if o.category == "face" else o.vertices.mean(0, keepdims=True)
-            side = (v - f.split_point) @ f.split_normal > 0
-            out[o.name] = np.broadcast_to(side, (o.n_vertices,)) if o.category != "face" else side
+        for name, split in self.fields.splits.items():
+            for o in self.head.objects:
+                if o.category == "face":
+                    w = split.upper_weight(o.vertices)
+                else:
+                    centre = o.vertices.mean(0, keepdims=True)
+                    w = np.full(o.n_vertices, float(split.upper_weight(centre)[0] > 0.5))
+                w.setflags(write=False)
+                out[name, o.name] = w
         return out
 
     def _side_mask(self, v: np.ndarray, side: str | None) -> np.ndarray | None:
@@ -436,11 +548,12 @@ class FieldRig(Rig):
         if isinstance(f, LinearField):
             out[:] = f(u)
         else:
-            up = self._upper[name]
-            for half, sel in ((f.upper, up), (f.lower, ~up)):
+            w = self._upper[f.split, name]
+            for half, wh in ((f.upper, w), (f.lower, 1.0 - w)):
+                sel = wh > 0
                 if half is not None and sel.any():
-                    out[sel] = half(u[sel])
-        return out * self.fields.scale
+                    out[sel] += half(u[sel]) * wh[sel, None]
+        return self.fields.to_head(out)
 
     @cached_property
     def _basis(self) -> dict[str, dict[str, np.ndarray]]:

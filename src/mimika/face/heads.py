@@ -6,7 +6,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from mimika.errors import DataError
+from mimika.errors import DataError, ParameterError
 from mimika.face.head import Head
 from mimika.face.rig import Rig
 
@@ -36,43 +36,56 @@ def list_heads() -> list[HeadInfo]:
     ]
 
 
+def _field_rig(head: Head, fields: str | Path | None) -> Rig:
+    """The FieldRig of ``head``: built-in fields, or a file (fitted files are aligned to the
+    head by their recorded landmarks, see :func:`mimika.face.fit.load_fitted_rig`)."""
+    if fields is None:
+        from mimika.face.field import load_field_rig
+
+        return load_field_rig(head)
+    from mimika.face.fit import load_fitted_rig
+
+    return load_fitted_rig(head, fields)
+
+
 def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None = None,
-              resolution: int = 1) -> tuple[Head, Rig]:
+              resolution: int = 1, identity=None) -> tuple[Head, Rig]:
     """Return ``(head, rig)`` for ``spec``.
 
     ``builtin`` — the procedural head with its FieldRig (``fields`` overrides its parameters);
     ``ict`` — the ICT Face Model from ``MIMIKA_ICT_DIR`` with its BlendshapeRig; a directory —
     an ICT-FaceKit checkout; an ``.obj`` file — a face mesh in mimika's frame (cm, y up,
     facing +z) driven by the built-in fields (AUs are fields over space, so any similar face
-    mesh deforms).
+    mesh deforms). ``identity`` (ICT heads only): an identity mode 0–9 or a sequence of mode
+    weights (see :func:`mimika.face.ict.identity_weights`).
     """
     s = str(spec)
+    is_ict = s == "ict" or Path(s).is_dir()
+    if identity is not None and not is_ict:
+        raise ParameterError(f"identity applies to the ICT head only, not {s!r}")
     if s == "builtin":
         from mimika.face.builtin import build_builtin_head
-        from mimika.face.field import load_field_rig
 
         head = build_builtin_head(resolution)
-        return head, load_field_rig(head, fields)
+        return head, _field_rig(head, fields)
     if s == "ict" or Path(s).is_dir():
         from mimika.face.blendshape import load_ict_rig
 
         if fields is not None:
-            from mimika.face.field import load_field_rig
             from mimika.face.ict import load_ict_head
 
-            head = load_ict_head(None if s == "ict" else s)
-            return head, load_field_rig(head, fields)
-        rig = load_ict_rig(None if s == "ict" else s)
+            head = load_ict_head(None if s == "ict" else s, identity)
+            return head, _field_rig(head, fields)
+        rig = load_ict_rig(None if s == "ict" else s, identity)
         return rig.head, rig
     p = Path(s)
     if p.suffix.lower() == ".obj":
         if not p.is_file():
             raise DataError(f"mesh file {p} does not exist")
-        from mimika.face.field import load_field_rig
         from mimika.face.meshhead import head_from_obj
 
         head = head_from_obj(p)
-        return head, load_field_rig(head, fields)
+        return head, _field_rig(head, fields)
     raise DataError(
         f"unknown head {s!r}: use 'builtin', 'ict', an ICT-FaceKit folder or an .obj file "
         "(run 'mimika heads')"

@@ -12,21 +12,23 @@ import hashlib
 import json
 import logging
 import os
-import tempfile
 import time
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from mimika.errors import DataError
+from mimika.errors import DataError, ParameterError
 from mimika.face.blendshape import ShapeSet
 from mimika.face.head import Head, MeshObject, Part
+from mimika.io.atomic import atomic_open
 from mimika.io.obj import read_obj, read_obj_vertices
 
 log = logging.getLogger(__name__)
 
-__all__ = ["IctData", "find_ict_dir", "load_ict", "load_ict_data", "load_ict_head"]
+__all__ = ["IctData", "find_ict_dir", "identity_weights", "load_ict", "load_ict_data",
+           "load_ict_head", "load_ict_identities", "with_identity"]
 
 ENV_DIR = "MIMIKA_ICT_DIR"
 ENV_CACHE = "MIMIKA_CACHE_DIR"
@@ -157,15 +159,8 @@ def _parse(folder: Path, names: list[str], files: list[Path]) -> dict[str, np.nd
 
 
 def _write_atomic(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(path) as fh:
+        np.savez(fh, **arrays)
 
 
 def load_ict_data(path: str | os.PathLike | None = None, *, cache: bool = True) -> IctData:
@@ -205,6 +200,71 @@ def load_ict_data(path: str | os.PathLike | None = None, *, cache: bool = True) 
         shape_names=tuple(str(s) for s in arrays["shape_names"]),
         deltas=arrays["deltas"].astype(np.float32, copy=False),
     )
+
+
+# -- identities (PCA identity modes identity000–009.obj) -----------------------------------------
+
+N_IDENTITIES = 10  #: identity modes in ICT Face Model Light
+Identity = int | Sequence[float] | None
+
+
+def identity_weights(identity: Identity) -> np.ndarray | None:
+    """``identity`` → weights (10,) of the identity modes: an int K (0–9) is mode K at weight 1
+    (the mesh ``identityK.obj``); a sequence gives the weights (missing trailing ones are 0)."""
+    if identity is None:
+        return None
+    if isinstance(identity, int | np.integer):
+        if not 0 <= int(identity) < N_IDENTITIES:
+            raise ParameterError(f"identity {identity} must be 0–{N_IDENTITIES - 1}")
+        w = np.zeros(N_IDENTITIES)
+        w[int(identity)] = 1.0
+        return w
+    w = np.asarray(list(identity), float).ravel()
+    if len(w) > N_IDENTITIES or not np.all(np.isfinite(w)):
+        raise ParameterError(f"identity weights must be at most {N_IDENTITIES} finite numbers, "
+                             f"got {list(w)}")
+    return np.r_[w, np.zeros(N_IDENTITIES - len(w))]
+
+
+def load_ict_identities(path: str | os.PathLike | None = None, *,
+                        cache: bool = True) -> np.ndarray:
+    """Identity-mode deltas (10, V, 3) float32 = ``identityK.obj`` − neutral (cached .npz)."""
+    folder = find_ict_dir(path)
+    files = [folder / f"identity{k:03d}.obj" for k in range(N_IDENTITIES)]
+    missing = [f.name for f in files if not f.is_file()]
+    if missing:
+        raise DataError(f"{folder}: identity files missing: {', '.join(missing)}")
+    cfile = _cache_dir() / f"ict-id-{_cache_key(folder, files)}.npz"
+    if cache and cfile.is_file():
+        try:
+            with np.load(cfile, allow_pickle=False) as z:
+                return z["deltas"].astype(np.float32, copy=False)
+        except Exception as e:  # a corrupt cache is rebuilt
+            log.warning("ignoring unreadable ICT identity cache %s (%s)", cfile, e)
+    neutral = read_obj_vertices(folder / NEUTRAL)
+    deltas = np.empty((len(files), *neutral.shape), np.float32)
+    for k, f in enumerate(files):
+        v = read_obj_vertices(f)
+        if v.shape != neutral.shape:
+            raise DataError(f"{f}: has {len(v)} vertices, expected {len(neutral)}")
+        np.subtract(v, neutral, out=deltas[k])
+    if cache:
+        try:
+            _write_atomic(cfile, {"deltas": deltas})
+        except OSError as e:
+            log.warning("could not write ICT identity cache %s: %s", cfile, e)
+    return deltas
+
+
+def with_identity(data: IctData, identity: Identity) -> IctData:
+    """``data`` with the neutral mesh moved to an identity: vertices + Σₖ wₖ·δₖ (expression
+    deltas unchanged — the ICT model adds them to any identity)."""
+    w = identity_weights(identity)
+    if w is None or not np.any(w):
+        return data
+    d = load_ict_identities(data.folder)
+    v = data.vertices + np.tensordot(w.astype(np.float32), d, axes=1)
+    return replace(data, vertices=v.astype(np.float32))
 
 
 # -- head assembly ------------------------------------------------------------------------------
@@ -345,12 +405,15 @@ def object_deltas(data: IctData) -> ShapeSet:
     )
 
 
-def load_ict(path: str | os.PathLike | None = None) -> tuple[Head, ShapeSet]:
-    """The ICT :class:`Head` and its expression shape deltas (cached parse)."""
+def load_ict(path: str | os.PathLike | None = None,
+             identity: Identity = None) -> tuple[Head, ShapeSet]:
+    """The ICT :class:`Head` (optionally an ``identity``, see :func:`identity_weights`) and its
+    expression shape deltas (cached parse)."""
     data = load_ict_data(path)
-    return build_head(data), object_deltas(data)
+    return build_head(with_identity(data, identity)), object_deltas(data)
 
 
-def load_ict_head(path: str | os.PathLike | None = None) -> Head:
-    """The ICT Face Model as a :class:`Head` (objects, 68 landmarks into ``skin``, anchors)."""
-    return build_head(load_ict_data(path))
+def load_ict_head(path: str | os.PathLike | None = None, identity: Identity = None) -> Head:
+    """The ICT Face Model as a :class:`Head` (objects, 68 landmarks into ``skin``, anchors),
+    optionally an ``identity`` (int 0–9 or mode weights, see :func:`identity_weights`)."""
+    return build_head(with_identity(load_ict_data(path), identity))

@@ -15,13 +15,11 @@ they may shadow a built-in only when created with ``force=True``.
 
 from __future__ import annotations
 
-import contextlib
 import difflib
 import json
 import logging
 import os
 import re
-import tempfile
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from functools import lru_cache
@@ -31,6 +29,7 @@ from typing import Any
 
 from mimika.errors import DataError, ParameterError
 from mimika.facs.catalogue import parse_au_values
+from mimika.io.atomic import atomic_write
 
 log = logging.getLogger(__name__)
 
@@ -135,18 +134,7 @@ def atomic_write_text(path: Path, text: str) -> None:
 
     On any failure the previous file is left untouched and the temp file is removed.
     """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    atomic_write(path, text)
 
 
 class ExpressionLibrary:

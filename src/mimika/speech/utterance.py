@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from mimika.errors import DataError, ParameterError
+from mimika.io.atomic import atomic_write
 
 FORMAT_VERSION = 1
 
@@ -159,12 +159,4 @@ def _write_atomic(path: str | os.PathLike, data: bytes) -> None:
     p = Path(path)
     if p.parent and not p.parent.exists():
         raise ParameterError(f"cannot write {str(p)!r}: folder {str(p.parent)!r} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", dir=p.parent or ".")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, p)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(p, data)

@@ -1,0 +1,420 @@
+"""Headless OpenGL renderer for a :class:`~mimika.face.head.Head`.
+
+Each frame recomputes smooth vertex normals from the given positions (one sparse
+vertex–face product per object), rewrites a dynamic vertex buffer, draws every part with its
+material into a multisample framebuffer over a studio backdrop, resolves and reads back RGB.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import logging
+from collections.abc import Mapping
+from dataclasses import dataclass
+from importlib import resources
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from mimika.errors import ParameterError, RenderError
+from mimika.face.head import Head, MeshObject
+from mimika.render.camera import Camera, check_view, frame_head
+from mimika.render.context import get_context
+
+log = logging.getLogger(__name__)
+
+# Lights in camera space (x right, y up, +z toward the viewer); colours are linear.
+KEY_DIR, KEY_COL = (-0.55, 0.55, 0.62), (1.0, 0.93, 0.85)
+FILL_DIR, FILL_COL = (0.75, 0.05, 0.55), (0.30, 0.34, 0.40)
+RIM_DIR, RIM_COL = (0.45, 0.55, -0.7), (0.55, 0.55, 0.6)
+SKY, GROUND = (0.24, 0.26, 0.30), (0.10, 0.085, 0.075)
+EXPOSURE = 1.05
+BACKFACE = 0.3  # brightness of back faces (the inside of the skin seen through openings)
+# Backdrop, sRGB.
+BG_TOP, BG_BOTTOM, BG_GLOW = (0.25, 0.28, 0.33), (0.09, 0.10, 0.12), (0.05, 0.055, 0.06)
+
+
+def srgb_to_linear(hex_color: str) -> tuple[float, float, float]:
+    """``"#rrggbb"`` (sRGB) to a linear RGB triple in [0, 1]."""
+    h = hex_color.lstrip("#")
+    if len(h) != 6:
+        raise ValueError(f"colour {hex_color!r} is not #rrggbb")
+    c = np.array([int(h[i : i + 2], 16) for i in (0, 2, 4)]) / 255.0
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return (float(lin[0]), float(lin[1]), float(lin[2]))
+
+
+@dataclass(frozen=True)
+class Material:
+    """Shading parameters of one material; colours linear RGB."""
+
+    name: str
+    color: tuple[float, float, float]
+    specular: float = 0.2
+    shininess: float = 20.0
+    wrap: float = 0.0
+    scatter: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    alpha: float = 1.0
+
+
+@functools.cache
+def load_materials() -> dict[str, Material]:
+    """The materials of ``render/data/materials.json`` by name (``_default`` included)."""
+    text = resources.files("mimika.render").joinpath("data/materials.json").read_text("utf-8")
+    out = {}
+    for name, m in json.loads(text).items():
+        if not isinstance(m, dict):
+            continue  # documentation entries
+        out[name] = Material(
+            name=name,
+            color=srgb_to_linear(m["color"]),
+            specular=float(m.get("specular", 0.2)),
+            shininess=float(m.get("shininess", 20.0)),
+            wrap=float(m.get("wrap", 0.0)),
+            scatter=srgb_to_linear(m.get("scatter", "#ffffff")),
+            alpha=float(m.get("alpha", 1.0)),
+        )
+    return out
+
+
+@functools.cache
+def _warn_unknown_material(name: str) -> None:
+    log.warning("unknown material %r: drawing it neutral grey (see render/data/materials.json)",
+                name)
+
+
+def material(name: str) -> Material:
+    """The material ``name``; unknown names give a neutral grey and a logged warning."""
+    mats = load_materials()
+    if name in mats:
+        return mats[name]
+    _warn_unknown_material(name)
+    return mats["_default"]
+
+
+def _shader(name: str) -> str:
+    return resources.files("mimika.render").joinpath(f"shaders/{name}").read_text("utf-8")
+
+
+def incidence_matrix(faces: np.ndarray, n_vertices: int) -> sp.csr_matrix:
+    """Vertex–face incidence, shape (N, F), CSR, float32: entry (v, f) = 1 if f uses v."""
+    faces = np.asarray(faces, np.int64).reshape(-1, 3)
+    rows = faces.ravel()
+    cols = np.repeat(np.arange(len(faces)), 3)
+    data = np.ones(len(rows), np.float32)
+    m = sp.csr_matrix((data, (rows, cols)), shape=(n_vertices, len(faces)), dtype=np.float32)
+    m.sum_duplicates()
+    return m
+
+
+def vertex_normals(
+    positions: np.ndarray, faces: np.ndarray, incidence: sp.csr_matrix | None = None
+) -> np.ndarray:
+    """Area-weighted smooth unit normals, shape (N, 3) float32, of ``positions`` (N, 3).
+
+    ``faces`` (F, 3) are counter-clockwise seen from outside. Vertices in no (or only
+    degenerate) faces get (0, 0, 1).
+    """
+    v = np.asarray(positions, np.float32)
+    if incidence is None:
+        incidence = incidence_matrix(faces, len(v))
+    a, b, c = v[faces[:, 0]], v[faces[:, 1]], v[faces[:, 2]]
+    e1, e2 = b - a, c - a
+    fn = np.empty_like(e1)  # cross(e1, e2), twice the area
+    fn[:, 0] = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
+    fn[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
+    fn[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    n = np.asarray(incidence @ fn, np.float32)
+    n[:, 2] += 1e-30  # zero normals become +z after normalising
+    n /= np.sqrt(np.einsum("ij,ij->i", n, n))[:, None]
+    return n
+
+
+class _GpuObject:
+    """GPU state of one drawable object: dynamic VBO, index buffer, VAO and part ranges."""
+
+    def __init__(self, ctx: Any, prog: Any, obj: MeshObject) -> None:
+        self.name = obj.name
+        self.n_vertices = obj.n_vertices
+        faces = np.concatenate([p.faces for p in obj.parts]).astype(np.int32)
+        if len(faces) and (faces.min() < 0 or faces.max() >= obj.n_vertices):
+            raise ParameterError(
+                f"object {obj.name!r}: face indices must be in [0, {obj.n_vertices}), "
+                f"got [{faces.min()}, {faces.max()}]"
+            )
+        if _winding_inward(obj.vertices, faces):
+            log.info("object %r: faces wind clockwise seen from outside; flipping", obj.name)
+            faces = faces[:, [0, 2, 1]].copy()
+        self.faces = faces
+        self.incidence = incidence_matrix(faces, obj.n_vertices)
+        self.parts: list[tuple[Material, int, int]] = []  # material, first index, index count
+        first = 0
+        for p in obj.parts:
+            self.parts.append((material(p.material), first, 3 * len(p.faces)))
+            first += 3 * len(p.faces)
+        self.interleaved = np.empty((obj.n_vertices, 6), np.float32)
+        self.vbo = ctx.buffer(reserve=self.interleaved.nbytes, dynamic=True)
+        self.ibo = ctx.buffer(faces.tobytes())
+        self.vao = ctx.vertex_array(
+            prog, [(self.vbo, "3f 3f", "in_position", "in_normal")], self.ibo, 4
+        )
+        self.rest = obj.vertices
+        self.holds_rest = False
+
+    def update(self, positions: np.ndarray | None) -> None:
+        """Write ``positions`` (N, 3) and their normals; ``None`` means the rest pose."""
+        if positions is None:
+            if self.holds_rest:
+                return
+            positions = self.rest
+        self.interleaved[:, :3] = positions
+        self.interleaved[:, 3:] = vertex_normals(positions, self.faces, self.incidence)
+        self.vbo.write(self.interleaved)
+        self.holds_rest = positions is self.rest
+
+    def release(self) -> None:
+        for o in (self.vao, self.ibo, self.vbo):
+            o.release()
+
+
+def _winding_inward(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """True if most face area points toward the object's centre (clockwise winding)."""
+    if len(faces) == 0:
+        return False
+    v = np.asarray(vertices, np.float64)
+    a, b, c = v[faces[:, 0]], v[faces[:, 1]], v[faces[:, 2]]
+    fn = np.cross(b - a, c - a)
+    centre = v[np.unique(faces)].mean(0)
+    return float(np.einsum("ij,ij->", fn, (a + b + c) / 3.0 - centre)) < 0.0
+
+
+_GL_KEYS = ("bg_vao", "prog", "bg_prog", "fbo", "resolve")
+
+
+class Renderer:
+    """Renders a :class:`Head` to RGB images with headless OpenGL.
+
+    Parameters
+    ----------
+    head
+        The head to draw. Objects with no parts are not drawn.
+    size
+        Image (width, height) in pixels.
+    samples
+        Multisample anti-aliasing samples (0 disables it).
+
+    The GL context is created on the first :meth:`render`; ``close()`` (or leaving a
+    ``with`` block) frees this renderer's GPU objects.
+    """
+
+    def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4) -> None:
+        try:
+            w, h = (int(s) for s in size)
+        except (TypeError, ValueError):
+            raise ParameterError(f"size={size!r} must be (width, height) in pixels") from None
+        if not (1 <= w <= 8192 and 1 <= h <= 8192):
+            raise ParameterError(f"size={size!r}: width and height must be in 1..8192 pixels")
+        if int(samples) < 0:
+            raise ParameterError(f"samples={samples!r} must be 0 (no anti-aliasing) or more")
+        self.head = head
+        self.size = (w, h)
+        self.samples = int(samples)
+        self._cameras: dict[str, Camera] = {}
+        self._gl: dict[str, Any] | None = None
+        self._objects: list[_GpuObject] = []
+        self._sizes = {o.name: o.n_vertices for o in head.objects}
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def aspect(self) -> float:
+        """Width / height of the image."""
+        return self.size[0] / self.size[1]
+
+    def camera(self, view: str = "front") -> Camera:
+        """The camera of ``view`` (framed on the rest-pose face, cached)."""
+        check_view(view)
+        if view not in self._cameras:
+            self._cameras[view] = frame_head(self.head, view, aspect=self.aspect)
+        return self._cameras[view]
+
+    def render(
+        self,
+        positions: Mapping[str, np.ndarray] | None = None,
+        view: str = "front",
+        camera: Camera | None = None,
+    ) -> np.ndarray:
+        """Draw the head and return the image, shape (H, W, 3) uint8 RGB, top row first.
+
+        ``positions`` maps object names to vertex positions (N, 3) in cm; objects not in it
+        are drawn at rest. ``camera`` overrides the camera of ``view``.
+        """
+        cam = camera if camera is not None else self.camera(view)
+        pos = self._check_positions(positions)
+        gl = self._setup()
+        ctx = gl["ctx"]
+        try:
+            for o in self._objects:
+                o.update(pos.get(o.name))
+            fbo = gl["fbo"]
+            fbo.use()
+            ctx.viewport = (0, 0, *self.size)
+            fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
+            ctx.disable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
+            gl["bg_vao"].render(ctx.TRIANGLES, vertices=3)
+            ctx.enable(ctx.DEPTH_TEST)
+            prog = gl["prog"]
+            prog["u_view"].write(cam.view_matrix.T.astype("f4").tobytes())
+            prog["u_proj"].write(cam.projection_matrix.T.astype("f4").tobytes())
+            glass = []
+            for o in self._objects:
+                for mat, first, count in o.parts:
+                    if mat.alpha < 1.0:
+                        glass.append((o, mat, first, count))
+                        continue
+                    self._set_material(prog, mat)
+                    o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+            if glass:
+                ctx.enable(ctx.BLEND)
+                ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
+                ctx.depth_mask = False
+                for o, mat, first, count in glass:
+                    self._set_material(prog, mat)
+                    o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+                ctx.depth_mask = True
+                ctx.disable(ctx.BLEND)
+            if gl["resolve"] is not fbo:
+                ctx.copy_framebuffer(gl["resolve"], fbo)
+            data = gl["resolve"].read(components=3, alignment=1)
+        except RenderError:
+            raise
+        except Exception as exc:  # moderngl raises plain Errors
+            raise RenderError(f"rendering {self.head.name!r} failed: {exc}") from exc
+        w, h = self.size
+        return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
+
+    def close(self) -> None:
+        """Free this renderer's GPU objects (the shared GL context stays)."""
+        for o in self._objects:
+            o.release()
+        self._objects = []
+        if self._gl is not None:
+            gl, self._gl = self._gl, None
+            done: set[int] = set()
+            for obj in (*(gl.get(k) for k in _GL_KEYS), *gl["attachments"]):
+                if obj is not None and id(obj) not in done:
+                    done.add(id(obj))
+                    obj.release()
+
+    def __enter__(self) -> Renderer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ internals
+    def _check_positions(self, positions: Mapping[str, np.ndarray] | None) -> dict:
+        if not positions:
+            return {}
+        out = {}
+        for name, p in positions.items():
+            if name not in self._sizes:
+                raise ParameterError(
+                    f"positions for unknown object {name!r}; objects of head "
+                    f"{self.head.name!r}: {', '.join(self._sizes)}"
+                )
+            a = np.asarray(p, np.float32)
+            if a.shape != (self._sizes[name], 3):
+                raise ParameterError(
+                    f"positions[{name!r}] has shape {a.shape}, expected ({self._sizes[name]}, 3)"
+                )
+            out[name] = a
+        return out
+
+    @staticmethod
+    def _set_material(prog: Any, m: Material) -> None:
+        prog["u_base"].value = m.color
+        prog["u_specular"].value = m.specular
+        prog["u_shininess"].value = m.shininess
+        prog["u_wrap"].value = m.wrap
+        prog["u_scatter"].value = m.scatter
+        prog["u_alpha"].value = m.alpha
+
+    def _setup(self) -> dict[str, Any]:
+        if self._gl is not None:
+            return self._gl
+        ctx = get_context()
+        try:
+            self._gl = self._create(ctx)
+        except RenderError:
+            raise
+        except Exception as exc:
+            self.close()
+            raise RenderError(f"setting up OpenGL objects failed: {exc}") from exc
+        return self._gl
+
+    def _create(self, ctx: Any) -> dict[str, Any]:
+        gl: dict[str, Any] = {"ctx": ctx, "attachments": []}
+        prog = ctx.program(
+            vertex_shader=_shader("mesh.vert.glsl"), fragment_shader=_shader("mesh.frag.glsl")
+        )
+        gl["prog"] = prog
+        for name, value in (
+            ("u_key_dir", _unit(KEY_DIR)),
+            ("u_key_col", KEY_COL),
+            ("u_fill_dir", _unit(FILL_DIR)),
+            ("u_fill_col", FILL_COL),
+            ("u_rim_dir", _unit(RIM_DIR)),
+            ("u_rim_col", RIM_COL),
+            ("u_sky", SKY),
+            ("u_ground", GROUND),
+            ("u_exposure", EXPOSURE),
+            ("u_backface", BACKFACE),
+        ):
+            prog[name].value = value
+        bg = ctx.program(
+            vertex_shader=_shader("background.vert.glsl"),
+            fragment_shader=_shader("background.frag.glsl"),
+        )
+        bg["u_top"].value = BG_TOP
+        bg["u_bottom"].value = BG_BOTTOM
+        bg["u_glow"].value = BG_GLOW
+        bg["u_aspect"].value = self.aspect
+        gl["bg_prog"] = bg
+        gl["bg_vao"] = ctx.vertex_array(bg, [])
+
+        samples = min(self.samples, int(ctx.max_samples))
+        if samples < self.samples:
+            log.warning("samples=%d not supported, using %d", self.samples, samples)
+        if samples == 1:
+            samples = 0
+        resolve_color = ctx.renderbuffer(self.size, components=3)
+        gl["attachments"].append(resolve_color)
+        if samples:
+            color = ctx.renderbuffer(self.size, components=3, samples=samples)
+            depth = ctx.depth_renderbuffer(self.size, samples=samples)
+            gl["attachments"] += [color, depth]
+            gl["fbo"] = ctx.framebuffer(color, depth)
+            gl["resolve"] = ctx.framebuffer(resolve_color)
+        else:
+            depth = ctx.depth_renderbuffer(self.size)
+            gl["attachments"].append(depth)
+            gl["fbo"] = gl["resolve"] = ctx.framebuffer(resolve_color, depth)
+
+        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects if o.parts]
+        log.debug(
+            "renderer for %r: %d objects, %d triangles, %dx%d, %d samples",
+            self.head.name,
+            len(self._objects),
+            self.head.n_triangles,
+            *self.size,
+            samples,
+        )
+        return gl
+
+
+def _unit(v: tuple[float, float, float]) -> tuple[float, float, float]:
+    a = np.asarray(v, np.float64)
+    a = a / np.linalg.norm(a)
+    return (float(a[0]), float(a[1]), float(a[2]))

@@ -1,0 +1,67 @@
+#version 330
+// Studio lighting in view space: warm key (upper left of the camera), cool fill (right),
+// rim light from behind, hemispheric ambient. Wrap diffuse with a scatter tint for skin,
+// normalised Blinn-Phong specular. Linear lighting, sRGB output.
+in vec3 v_pos;
+in vec3 v_normal;
+
+uniform vec3 u_base;        // linear base colour
+uniform float u_specular;   // specular strength
+uniform float u_shininess;  // Blinn-Phong exponent
+uniform float u_wrap;       // wrap diffuse (0 = Lambert)
+uniform vec3 u_scatter;     // tint of light wrapped past the terminator (skin: reddish)
+uniform float u_alpha;      // < 1: glass-like, premultiplied (specular stays)
+uniform float u_backface;   // brightness of back faces (cavities seen from outside)
+
+uniform vec3 u_key_dir;
+uniform vec3 u_key_col;
+uniform vec3 u_fill_dir;
+uniform vec3 u_fill_col;
+uniform vec3 u_rim_dir;
+uniform vec3 u_rim_col;
+uniform vec3 u_sky;
+uniform vec3 u_ground;
+uniform float u_exposure;
+
+out vec4 f_color;
+
+vec3 to_srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+
+// Soft shoulder so bright highlights roll off instead of clipping.
+vec3 tonemap(vec3 c) {
+    vec3 x = c * u_exposure;
+    vec3 knee = vec3(0.8);
+    vec3 over = max(x - knee, 0.0);
+    return min(x, knee) + over / (1.0 + over / (1.0 - knee.x));
+}
+
+vec3 shade(vec3 n, vec3 v, vec3 l, vec3 col) {
+    float ndl = dot(n, l);
+    float lambert = max(ndl, 0.0);
+    float wrapped = max((ndl + u_wrap) / (1.0 + u_wrap), 0.0);
+    vec3 diffuse = u_base * (lambert + max(wrapped - lambert, 0.0) * u_scatter);
+    vec3 h = normalize(l + v);
+    float norm = (u_shininess + 8.0) / 25.1327;  // (n + 8) / (8 pi)
+    float fres = 1.0 + 2.0 * pow(1.0 - max(dot(v, h), 0.0), 5.0);
+    float spec = u_specular * norm * fres * pow(max(dot(n, h), 0.0), u_shininess) * lambert;
+    return col * (diffuse * u_alpha + vec3(spec));
+}
+
+void main() {
+    vec3 n = normalize(v_normal);
+    float facing = 1.0;
+    if (!gl_FrontFacing) {
+        n = -n;
+        facing = u_backface;
+    }
+    vec3 v = normalize(-v_pos);
+    vec3 c = shade(n, v, u_key_dir, u_key_col)
+           + shade(n, v, u_fill_dir, u_fill_col)
+           + shade(n, v, u_rim_dir, u_rim_col);
+    vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * u_base * u_alpha;
+    c = (c + ambient) * facing;
+    f_color = vec4(to_srgb(tonemap(c)), u_alpha);
+}
