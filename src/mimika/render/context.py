@@ -19,6 +19,8 @@ INSTALL_HINT = "install it with: apt-get install -y libegl1 libgl1-mesa-dri"
 
 _context: Any = None
 _lock = threading.Lock()
+#: Held while a frame is drawn: the one context must not be used by two threads at once.
+render_lock = threading.RLock()
 
 
 def _create_context() -> Any:

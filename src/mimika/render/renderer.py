@@ -21,7 +21,7 @@ import scipy.sparse as sp
 from mimika.errors import ParameterError, RenderError
 from mimika.face.head import Head, MeshObject
 from mimika.render.camera import Camera, check_view, frame_head
-from mimika.render.context import get_context
+from mimika.render.context import get_context, render_lock
 
 log = logging.getLogger(__name__)
 
@@ -252,8 +252,14 @@ class Renderer:
         """
         cam = camera if camera is not None else self.camera(view)
         pos = self._check_positions(positions)
-        gl = self._setup()
-        ctx = gl["ctx"]
+        ctx = get_context()
+        # the context is shared by every renderer of the process: make it current and keep
+        # other threads out while this frame is drawn (GL contexts are not thread-safe)
+        with render_lock, ctx:
+            gl = self._setup()
+            return self._draw(gl, ctx, cam, pos)
+
+    def _draw(self, gl: dict, ctx: Any, cam: Camera, pos: dict) -> np.ndarray:
         try:
             for o in self._objects:
                 o.update(pos.get(o.name))

@@ -1,0 +1,106 @@
+"""Headless rendering: what a user sees in the PNGs."""
+
+import os
+import threading
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from mimika import ParameterError
+from mimika.errors import RenderError
+from mimika.render import VIEWS, Renderer, contact_sheet, save_png
+
+pytestmark = pytest.mark.render
+SIZE = (320, 240)
+
+
+@pytest.fixture(scope="module")
+def renderer(builtin_rig):
+    with Renderer(builtin_rig.head, size=SIZE) as r:
+        yield r
+
+
+def background_mask(img):
+    """Pixels that differ from the backdrop gradient (estimated from the image border)."""
+    edge = np.concatenate([img[:, :4], img[:, -4:]], axis=1).astype(int)  # left/right strips
+    row_bg = np.median(edge, axis=1)[:, None, :]
+    return np.abs(img.astype(int) - row_bg).sum(2) > 30
+
+
+def test_image_has_size_and_the_head_fills_the_centre(renderer):
+    img = renderer.render()
+    assert img.shape == (240, 320, 3) and img.dtype == np.uint8
+    head = background_mask(img)
+    assert 0.25 < head.mean() < 0.8
+    assert head[100:140, 140:180].all()  # the face is in the middle
+    xs = np.nonzero(head)[1]
+    assert abs(xs.mean() - 160) < 20  # centred left–right
+
+
+def test_moving_vertices_changes_pixels_there_and_not_far_away(renderer, builtin_rig):
+    base = renderer.render().astype(int)
+    pos = builtin_rig.deform({"AU27": 1.0})
+    moved = renderer.render(pos).astype(int)
+    cam = renderer.camera("front")
+    chin = cam.project(builtin_rig.head.landmark_points()[[8, 57]], SIZE).mean(0).astype(int)
+    brow = cam.project(builtin_rig.head.landmark_points()[[19, 24]], SIZE).mean(0).astype(int)
+    diff = np.abs(base - moved).sum(2)
+    near = diff[chin[1] - 15:chin[1] + 15, chin[0] - 20:chin[0] + 20]
+    far = diff[brow[1] - 10:brow[1] + 10, brow[0] - 30:brow[0] + 30]
+    assert near.mean() > 20 and far.max() < 10
+
+
+def test_views_differ_and_unknown_view_names_the_valid_ones(renderer):
+    imgs = [renderer.render(view=v).astype(int) for v in VIEWS]
+    for a, b in [(0, 1), (1, 2), (0, 2)]:
+        assert np.abs(imgs[a] - imgs[b]).mean() > 5
+    with pytest.raises(ParameterError, match="valid views: front, three-quarter, profile"):
+        renderer.render(view="top")
+
+
+def test_iris_is_darker_than_the_sclera(renderer, builtin_rig):
+    img = renderer.render().astype(float)
+    cam = renderer.camera("front")
+    eye = builtin_rig.head["eye_L"]
+    centre = eye.pivot + np.array([0, 0, 1.2])  # front of the eyeball: the pupil/iris
+    side = eye.pivot + np.array([0.85, 0.0, 0.85])  # toward the outer corner: sclera
+    (cx, cy), (sx, sy) = cam.project(np.array([centre, side]), SIZE).astype(int)
+    assert img[cy, cx].sum() < 0.6 * img[sy, sx].sum()
+
+
+def test_renders_from_other_threads_are_identical(renderer):
+    a = renderer.render()
+    out = []
+    t = threading.Thread(target=lambda: out.append(renderer.render()))
+    t.start()
+    t.join()
+    np.testing.assert_array_equal(a, out[0])
+
+
+def test_save_png_round_trips_and_leaves_no_temp_file(tmp_path, renderer):
+    img = renderer.render()
+    p = save_png(img, tmp_path / "sub" / "face.png")
+    np.testing.assert_array_equal(np.asarray(Image.open(p)), img)
+    assert os.listdir(tmp_path / "sub") == ["face.png"]
+
+
+def test_contact_sheet_lays_out_labelled_tiles():
+    tiles = [np.full((60, 80, 3), 40 * i, np.uint8) for i in range(5)]
+    sheet = contact_sheet(tiles, [f"AU{i:02d}" for i in range(5)], columns=3, title="t")
+    assert sheet.shape[1] >= 3 * 80 and sheet.shape[0] >= 2 * 60
+    assert sheet.std() > 10
+    with pytest.raises(ParameterError):
+        contact_sheet([], [])
+
+
+def test_missing_egl_is_a_render_error_with_the_fix(monkeypatch, builtin_rig):
+    import mimika.render.context as context
+
+    def boom():
+        raise RuntimeError("eglGetDisplay failed")
+
+    monkeypatch.setattr(context, "_context", None)
+    monkeypatch.setattr(context, "_create_context", boom)
+    with pytest.raises(RenderError, match="apt-get install -y libegl1 libgl1-mesa-dri"):
+        Renderer(builtin_rig.head, size=(32, 32)).render()
