@@ -569,17 +569,55 @@ class FieldRig(Rig):
             out[code] = per
         return out
 
-    # -- deformation
-    def deform(self, aus: Mapping[str, float]) -> Positions:
-        vals = self.check(aus)
-        sides = split_sides(vals)
-        pos = {o.name: o.vertices.astype(np.float32, copy=True) for o in self.head.objects}
-        # 1. additive linear AUs: Δ evaluated on the rest mesh, summed
-        for code, (tl, tr) in sides.items():
-            if code in self.fields.linear and self.mixers[code] == "additive":
-                for name, d in self._basis[code].items():
-                    pos[name] += self._sided(d, self.head[name].vertices, tl, tr)
-        # 2. successive AUs in order, on the deformed mesh
+    @cached_property
+    def _additive(self) -> dict[str, np.ndarray | None]:
+        """Per object: matrix (R, 3·N) float32 — the displacement at τ = 1 of every additive
+        AU, one row per side for sided AUs (left mask, right mask; they sum to the bilateral
+        field), one row otherwise, in :attr:`_rows` order; ``None`` for objects none moves."""
+        out: dict[str, np.ndarray | None] = {}
+        for o in self.head.objects:
+            rows = []
+            for code, sided in self._rows:
+                d = self._basis[code].get(o.name)
+                if d is None:
+                    d = np.zeros((o.n_vertices, 3), np.float32)
+                if sided:
+                    ml = self._side_mask(o.vertices, "L")[:, None]
+                    rows += [d * ml, d * (1 - ml)]
+                else:
+                    rows.append(d)
+            if not rows or not np.any(rows):
+                out[o.name] = None
+                continue
+            mat = np.ascontiguousarray(np.stack(rows).reshape(len(rows), -1), np.float32)
+            mat.setflags(write=False)
+            out[o.name] = mat
+        return out
+
+    @cached_property
+    def _rows(self) -> tuple[tuple[str, bool], ...]:
+        """The additive AUs in matrix-row order, with whether each has a left and right row."""
+        return tuple((c, AU_CATALOGUE[c].sided) for c in self.fields.aus
+                     if c in self.fields.linear and self.mixers[c] == "additive")
+
+    def _row_values(self, values: np.ndarray, chans: Sequence[str]) -> np.ndarray:
+        """Frames (T, K) over ``chans`` → row weights (T, R): per side, bilateral plus
+        one-sided intensity, capped at 1 (``AU12=1, AU12L=.5`` → left 1, right 1)."""
+        col = {c: j for j, c in enumerate(chans)}
+        zero = np.zeros(len(values), np.float32)
+        out = []
+        for code, sided in self._rows:
+            bil = values[:, col[code]] if code in col else zero
+            if sided:
+                for side in "LR":
+                    one = values[:, col[code + side]] if code + side in col else zero
+                    out.append(np.minimum(bil + one, 1.0))
+            else:
+                out.append(np.minimum(bil, 1.0))
+        return np.stack(out, 1) if out else np.zeros((len(values), 0), np.float32)
+
+    def _successive(self, pos: Positions, sides: Mapping[str, tuple[float, float]]) -> None:
+        """Apply the successive AUs in :attr:`order` to ``pos`` in place."""
         for code in self.order:
             if code not in sides or self.mixers[code] != "successive":
                 continue
@@ -591,35 +629,47 @@ class FieldRig(Rig):
                         np.float32)
             else:
                 rot, cats = self.fields.rotations[code]
-                tau = sides[code][0]
                 for o in self.head.objects:
                     if o.category in cats:
-                        pos[o.name] = rot.apply(pos[o.name], tau, o.pivot).astype(np.float32)
+                        pos[o.name] = rot.apply(pos[o.name], tl, o.pivot).astype(np.float32)
+
+    # -- deformation
+    def deform(self, aus: Mapping[str, float]) -> Positions:
+        vals = self.check(aus)
+        chans = list(vals)
+        row = np.array([[vals[c] for c in chans]], np.float32)
+        pos = {name: p[0] for name, p in self.deform_batch(row, chans, check=False).items()}
         return pos
 
-    def deform_batch(self, values: np.ndarray, channels: Sequence[str]) -> dict[str, np.ndarray]:
-        """Vectorised :meth:`deform` for frames ``values`` (T, K): one matrix product for the
-        additive AUs, then the successive ones frame by frame (only where active)."""
+    def deform_batch(self, values: np.ndarray, channels: Sequence[str], *,
+                     check: bool = True) -> dict[str, np.ndarray]:
+        """Vectorised :meth:`deform` for frames ``values`` (T, K) → {object: (T, N, 3)}: one
+        matrix product for the additive AUs, then the successive ones frame by frame (only
+        in frames where one is active)."""
         values = np.asarray(values, np.float32)
+        if values.ndim != 2 or values.shape[1] != len(channels):
+            raise ParameterError(f"values must have shape (frames, {len(channels)}), "
+                                 f"got {values.shape}")
         chans = [parse_au(c) for c in channels]
-        self.check(dict.fromkeys(chans, 0.0))
-        additive = [j for j, c in enumerate(chans)
-                    if c[:4] in self.fields.linear and self.mixers[c[:4]] == "additive"]
+        if check:
+            self.check(dict.fromkeys(chans, 0.0))
+            if values.size and (values.min() < 0 or values.max() > 1):
+                raise ParameterError("AU values must be in [0, 1]")
+        weights = self._row_values(values, chans)
         out = {}
         for o in self.head.objects:
-            basis = np.zeros((len(additive), o.n_vertices * 3), np.float32)
-            for row, j in enumerate(additive):
-                d = self._basis[chans[j][:4]].get(o.name)
-                if d is not None:
-                    side = chans[j][4:]
-                    m = 1.0 if not side else self._side_mask(o.vertices, side)[:, None]
-                    basis[row] = (d * m).ravel()
-            flat = values[:, additive] @ basis + o.vertices.ravel()
-            out[o.name] = flat.reshape(len(values), o.n_vertices, 3)
-        rest = [j for j in range(len(chans)) if j not in additive]
-        for t in np.nonzero(np.any(values[:, rest] != 0, axis=1))[0] if rest else []:
-            frame = {chans[j]: float(values[t, j]) for j in range(len(chans))}
-            pos = self.deform(frame)
+            mat = self._additive[o.name]
+            if mat is None:
+                pos = np.broadcast_to(o.vertices.ravel(), (len(values), o.n_vertices * 3)).copy()
+            else:
+                pos = weights @ mat
+                pos += o.vertices.ravel()
+            out[o.name] = pos.reshape(len(values), o.n_vertices, 3)
+        succ = [j for j, c in enumerate(chans) if self.mixers[c[:4]] == "successive"]
+        for t in np.nonzero(np.any(values[:, succ] != 0, axis=1))[0] if succ else []:
+            frame = {chans[j]: float(values[t, j]) for j in succ if values[t, j] != 0}
+            pos = {name: out[name][t] for name in out}
+            self._successive(pos, split_sides(frame))
             for name in out:
                 out[name][t] = pos[name]
         return out

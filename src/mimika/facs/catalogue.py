@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import functools
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -74,6 +75,7 @@ def _all_codes() -> list[str]:
     return codes
 
 
+@functools.lru_cache(maxsize=4096)
 def parse_au(text: str | int) -> str:
     """Return the canonical code for ``text`` (``"12"``, ``"au12"``, ``"AU12L"`` …).
 
