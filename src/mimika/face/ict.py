@@ -368,9 +368,13 @@ def build_head(data: IctData) -> Head:
                   radius, r_iris)
         anchors[name] = pivot
 
+    # Lashes are strips meant for alpha-textured hair cards; drawn solid, the lower strips read
+    # as grey bands under the eyes, so only the upper ones (above the eyeball centres) are drawn.
     lo, hi = RANGES["lashes"]
-    objs.append(MeshObject("lashes", "face", v[lo:hi], (Part("lash", _object_faces(data, lo, hi)),),
-                           uvs=data.uvs[lo:hi]))
+    lv = v[lo:hi]
+    lf = _object_faces(data, lo, hi)
+    upper = lv[lf].mean(1)[:, 1] > anchors["eye_L"][1]
+    objs.append(MeshObject("lashes", "face", lv, (Part("lash", lf[upper]),), uvs=data.uvs[lo:hi]))
 
     lm = sv[data.landmarks]
     neck = v[9409:11248]
