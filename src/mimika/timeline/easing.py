@@ -133,6 +133,8 @@ def easing_names() -> tuple[str, ...]:
 def get_interpolator(name: str) -> Interpolator:
     """The interpolator registered as ``name``; unknown names raise with suggestions."""
     key = str(name).strip().lower()
+    if key == "learned" and key not in _REGISTRY:
+        import mimika.learn  # noqa: F401  registers the learned transition model (torch on use)
     if key in _REGISTRY:
         return _REGISTRY[key]
     close = difflib.get_close_matches(key, list(_REGISTRY), n=3)

@@ -1,0 +1,119 @@
+"""``mimika train transitions`` and ``mimika transition``: learned expression transitions.
+
+``train`` is a command group; other modules add their own sub-commands to it with
+:func:`train_subparsers` (e.g. ``train_subparsers(sub).add_parser("gan", …)``), in any order.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from mimika.errors import ParameterError
+
+_TRAIN: dict[int, argparse._SubParsersAction] = {}
+
+
+def train_subparsers(sub) -> argparse._SubParsersAction:
+    """The sub-parsers of ``mimika train`` (created on first call for this ``sub``)."""
+    key = id(sub)
+    if key not in _TRAIN:
+        t = sub.add_parser("train", help="train a learned model (transitions, …)")
+        _TRAIN[key] = t.add_subparsers(dest="train_what", required=True,
+                                       parser_class=type(t), metavar="MODEL")
+    return _TRAIN[key]
+
+
+def cmd_train_transitions(args: argparse.Namespace) -> int:
+    from mimika.learn.train import TrainConfig, prepare, save_checkpoint, train
+
+    if not args.output.endswith(".pt"):
+        raise ParameterError(f"output {args.output!r} must be a .pt file")
+    if args.epochs < 1:
+        raise ParameterError(f"--epochs={args.epochs} must be ≥ 1")
+    say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
+    t0 = time.perf_counter()
+    data = prepare(args.data, val=args.val, test=args.test)
+    n = {k: len(data.items(k)) for k in ("train", "val", "test")}
+    say(f"takes: train {', '.join(data.split.train)} | val {', '.join(data.split.val)} | "
+        f"test {', '.join(data.split.test)}; transitions {n['train']}/{n['val']}/{n['test']} "
+        f"({time.perf_counter() - t0:.1f} s)")
+    cfg = TrainConfig(model=args.model, epochs=args.epochs, lr=args.lr, threads=args.threads,
+                      seed=args.seed)
+
+    def progress(epoch: int, total: int, rec: dict) -> None:
+        say(f"epoch {epoch}/{total}  train {rec['train']:.5f}  val {rec['val']:.5f}  "
+            f"lr {rec['lr']:.0e}  {rec['time']:.0f} s")
+
+    ck = train(data, cfg, progress=progress)
+    p = save_checkpoint(ck, args.output, half=args.half)
+    if not args.quiet:
+        print(f"wrote {p} ({args.model}, {ck['n_params']:,} parameters, best val MSE "
+              f"{ck['best_val']:.5f} at epoch {ck['best_epoch']}, "
+              f"{ck['train_seconds']:.0f} s, {p.stat().st_size / 1e6:.1f} MB)")
+    return 0
+
+
+def cmd_transition(args: argparse.Namespace) -> int:
+    from mimika.knowledge.expressions import get_expression
+    from mimika.learn.interp import transition
+
+    out = args.output
+    if not out.lower().endswith((".csv", ".png")):
+        raise ParameterError(f"output {out!r} must be a .csv or .png file")
+    a = get_expression(args.start, args.intensity)
+    b = get_expression(args.to, args.intensity)
+    track = transition(a, b, duration=args.duration, fps=args.fps, model=args.model)
+    if out.lower().endswith(".csv"):
+        from mimika.io.tracks import write_au_csv
+
+        write_au_csv(track, out)
+    else:
+        from mimika.learn.plots import transition_png
+
+        transition_png(track, out, title=f"{args.start} → {args.to}, {args.duration:g} s",
+                       frames=args.frames, head=args.head)
+    if not args.quiet:
+        print(f"wrote {out} ({track.n_frames} frames at {track.fps:g} fps, "
+              f"{len(track.channels)} AUs)")
+    return 0
+
+
+def register(sub) -> None:
+    tsub = train_subparsers(sub)
+    q = tsub.add_parser("transitions", help="train a transition generator on a folder of "
+                        "takes (Live Link Face / OpenFace / AU CSV)")
+    q.add_argument("--data", required=True, metavar="DIR", help="folder of *.csv takes")
+    q.add_argument("-o", "--output", required=True, help="checkpoint to write (.pt)")
+    q.add_argument("--model", default="rtn", choices=("seed", "rtn"),
+                   help="seed: seed 000's LSTM; rtn: the improved model (default)")
+    q.add_argument("--epochs", type=int, default=40, help="epochs (default 40; seed ≈ 55 s "
+                   "each on 2 CPU threads, rtn ≈ 2 s)")
+    q.add_argument("--lr", type=float, default=0.005, help="Adam learning rate (×0.1 at each "
+                   "quarter of the run; seed 000 used 0.01)")
+    q.add_argument("--val", action="append", metavar="TAKE", help="validation take (file stem; "
+                   "repeatable; default 'facial' or the second-to-last)")
+    q.add_argument("--test", action="append", metavar="TAKE", help="held-out test take "
+                   "(repeatable; default 'apfel' or the last)")
+    q.add_argument("--threads", type=int, default=2, help="torch CPU threads (default 2)")
+    q.add_argument("--seed", type=int, default=0, help="random seed")
+    q.add_argument("--half", action="store_true", help="store float16 weights (half size)")
+    q.add_argument("-q", "--quiet", action="store_true")
+    q.set_defaults(func=cmd_train_transitions)
+
+    r = sub.add_parser("transition", help="a learned transition between two expressions "
+                       "(AU CSV or PNG plot + rendered strip)")
+    r.add_argument("--from", dest="start", required=True, metavar="EXPR",
+                   help="start expression (library name, e.g. happiness or neutral)")
+    r.add_argument("--to", required=True, metavar="EXPR", help="target expression")
+    r.add_argument("--duration", type=float, default=1.0, help="seconds (default 1)")
+    r.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
+    r.add_argument("--intensity", type=float, default=1.0, help="scale of both expressions")
+    r.add_argument("--model", default=None, help="checkpoint (default: the shipped model)")
+    r.add_argument("--frames", type=int, default=6,
+                   help="rendered frames in the PNG strip (0: plot only)")
+    r.add_argument("--head", default="builtin", help="head for the PNG strip")
+    r.add_argument("-o", "--output", required=True, help=".csv (AU CSV) or .png")
+    r.add_argument("-q", "--quiet", action="store_true")
+    r.set_defaults(func=cmd_transition)

@@ -1,0 +1,286 @@
+"""Training recipe for the transition models: folder of takes → split → segment → train.
+
+``prepare(folder)`` reads every take (three gap-filling variants for training takes only),
+fits the PCA + SOM :class:`~mimika.learn.segment.Segmenter` on the training takes and cuts
+transition examples from holds in every take. ``train(data, config)`` trains a seed or RTN
+model on CPU with seed 000's schedule scaled to ``epochs`` (lr ×0.1 at each quarter, restore
+the best-validation weights every eighth, gradient clipping) and returns a checkpoint dict;
+``save_checkpoint`` / ``load_model`` round-trip it (config, channels, fps, best val loss).
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import os
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mimika.errors import DataError, ParameterError
+from mimika.learn.data import (
+    FILLS,
+    MODEL_CHANNELS,
+    Split,
+    Take,
+    Transition,
+    fixed_windows,
+    list_takes,
+    load_take,
+    make_split,
+    random_windows,
+    stack_batch,
+)
+from mimika.learn.segment import Hold, Segmenter, transitions_between
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Prepared", "TrainConfig", "generate", "load_model", "prepare", "save_checkpoint",
+           "train"]
+
+Progress = Callable[[int, int, dict], None]
+
+
+@dataclass
+class Prepared:
+    """Everything :func:`train` and the report need from a folder of takes."""
+
+    takes: dict[str, Take]
+    split: Split
+    segmenter: Segmenter
+    holds: dict[str, list[Hold]]
+    transitions: dict[str, list[Transition]]  # per take, every fill variant of train takes
+
+    def items(self, part: str, *, fills: Sequence[str] | None = None) -> list[Transition]:
+        names = getattr(self.split, part)
+        return [t for n in names for t in self.transitions[n]
+                if fills is None or t.fill in fills]
+
+
+def prepare(folder: str | os.PathLike | Sequence[str | os.PathLike], *,
+            val: Sequence[str] | None = None, test: Sequence[str] | None = None,
+            augment: bool = True, max_length: int = 60) -> Prepared:
+    """Read takes, split them by take, segment and cut transitions (see the module doc)."""
+    paths = (list_takes(folder) if isinstance(folder, str | os.PathLike)
+             else [Path(p) for p in folder])
+    split = make_split([p.stem for p in paths], val=val, test=test)
+    takes: dict[str, Take] = {}
+    for p in paths:
+        part = split.of(p.stem)
+        if part == "unused":
+            continue
+        fills = FILLS if (augment and part == "train") else ("linear",)
+        takes[p.stem] = load_take(p, fills=fills)
+    if len({t.fps for t in takes.values()}) > 1:
+        raise DataError("takes have different frame rates; resample them to one first")
+    seg = Segmenter().fit([takes[n].values for n in split.train])
+    holds, trans = {}, {}
+    for n, t in takes.items():
+        holds[n] = seg.holds(t.values)
+        trans[n] = [x for f, v in t.variants.items()
+                    for x in transitions_between(v, holds[n], take=n, fill=f,
+                                                 max_length=max_length)]
+    log.info("split train=%s val=%s test=%s; transitions: %s", split.train, split.val,
+             split.test, {n: len(v) for n, v in trans.items()})
+    return Prepared(takes, split, seg, holds, trans)
+
+
+@dataclass
+class TrainConfig:
+    """Training recipe (seed 000's schedule, scaled: 400 epochs → ``epochs``)."""
+
+    model: str = "rtn"
+    epochs: int = 40
+    batch_size: int = 32
+    lr: float = 0.01  # seed 000: 0.01, ×0.1 every quarter of the run
+    decay_every: int = 0  # 0: epochs // 4
+    restore_every: int = 0  # 0: epochs // 8 (seed: every 50 of 400 epochs)
+    clip: float = 1.0
+    windows_per_epoch: int = 256  # random in-betweening windows per epoch (train takes)
+    window_lengths: tuple[int, int] = (5, 45)
+    val_window_lengths: tuple[int, ...] = (15, 30)  # fixed windows added to validation
+    seed: int = 0
+    threads: int = 2
+    model_args: dict = field(default_factory=dict)
+
+
+def _build(kind: str, n_channels: int, args: dict):
+    if kind == "seed":
+        from mimika.learn.transition_seed import SeedConfig, SeedTransition
+
+        return SeedTransition(SeedConfig(n_channels=n_channels, **args))
+    if kind == "rtn":
+        from mimika.learn.transition_rtn import RTNConfig, RTNTransition
+
+        return RTNTransition(RTNConfig(n_channels=n_channels, **args))
+    raise ParameterError(f"model={kind!r} must be 'seed' or 'rtn'")
+
+
+def _tensors(items: Sequence[Transition]):
+    import torch
+
+    w, f, m, n = stack_batch(items)
+    return (torch.from_numpy(w), torch.from_numpy(f), torch.from_numpy(m), torch.from_numpy(n))
+
+
+def _batches(items: list[Transition], size: int, rng: np.random.Generator | None):
+    """Batches of similar length (less padding): sort by length, chunk, shuffle chunks."""
+    order = sorted(range(len(items)), key=lambda i: (items[i].length,
+                                                     rng.random() if rng else 0))
+    chunks = [order[i:i + size] for i in range(0, len(order), size)]
+    if rng is not None:
+        rng.shuffle(chunks)
+    return [[items[i] for i in c] for c in chunks]
+
+
+def evaluate_loss(model, items: Sequence[Transition], batch_size: int = 64) -> float:
+    """Plain sequence MSE of ``model`` on ``items`` (eval mode, no noise)."""
+    import torch
+
+    model.eval()
+    tot, cnt = 0.0, 0.0
+    with torch.no_grad():
+        for b in _batches(list(items), batch_size, None):
+            w, f, m, n = _tensors(b)
+            p = model(w, _targets(f, n), f.shape[1], n)
+            se = ((p - f) ** 2).mean(-1)
+            tot += float((se * m).sum())
+            cnt += float(m.sum())
+    return tot / max(cnt, 1.0)
+
+
+def _targets(frames, lengths):
+    import torch
+
+    return frames[torch.arange(len(lengths)), lengths - 1]
+
+
+def train(data: Prepared, config: TrainConfig, *, progress: Progress | None = None) -> dict:
+    """Train one model; returns a checkpoint dict (see :func:`save_checkpoint`)."""
+    import torch
+
+    if config.epochs < 1:
+        raise ParameterError(f"epochs={config.epochs!r} must be ≥ 1")
+    torch.manual_seed(config.seed)
+    torch.set_num_threads(max(1, config.threads))
+    rng = np.random.default_rng(config.seed)
+    K = len(MODEL_CHANNELS)
+    model = _build(config.model, K, config.model_args)
+    seg_train = data.items("train")
+    train_takes = [data.takes[n] for n in data.split.train]
+    val_items = data.items("val") + [w for n in data.split.val for L in config.val_window_lengths
+                                     for w in fixed_windows(data.takes[n], L, stride=45)]
+    if not seg_train and config.windows_per_epoch <= 0:
+        raise DataError("no training transitions found; add takes or random windows")
+    opt = torch.optim.Adam(model.parameters(), lr=config.lr)
+    decay = config.decay_every or max(1, config.epochs // 4)
+    restore = config.restore_every or max(1, config.epochs // 8)
+    sched = torch.optim.lr_scheduler.StepLR(opt, step_size=decay, gamma=0.1)
+    best, best_state, best_epoch = float("inf"), copy.deepcopy(model.state_dict()), 0
+    history = []
+    t0 = time.perf_counter()
+    for epoch in range(1, config.epochs + 1):
+        model.train()
+        items = list(seg_train)
+        per_take = config.windows_per_epoch // max(len(train_takes), 1)
+        for tk in train_takes:
+            items += random_windows(tk, per_take, rng, lengths=config.window_lengths)
+        losses = []
+        for b in _batches(items, config.batch_size, rng):
+            w, f, m, n = _tensors(b)
+            pred = model(w, _targets(f, n), f.shape[1], n)
+            loss = model.loss(pred, f, m)
+            opt.zero_grad()
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(model.parameters(), config.clip)
+            opt.step()
+            losses.append(float(loss.detach()))
+        sched.step()
+        vl = evaluate_loss(model, val_items) if val_items else float(np.mean(losses))
+        if vl < best:
+            best, best_state, best_epoch = vl, copy.deepcopy(model.state_dict()), epoch
+        if epoch % restore == 0 and epoch < config.epochs:
+            model.load_state_dict(best_state)  # seed 000: restore the best weights
+        rec = {"epoch": epoch, "train": float(np.mean(losses)), "val": vl,
+               "lr": opt.param_groups[0]["lr"], "time": time.perf_counter() - t0}
+        history.append(rec)
+        log.info("epoch %d: train %.5f val %.5f", epoch, rec["train"], vl)
+        if progress:
+            progress(epoch, config.epochs, rec)
+    model.load_state_dict(best_state)
+    return {
+        "kind": config.model,
+        "config": asdict(model.config),
+        "channels": list(MODEL_CHANNELS),
+        "fps": float(next(iter(data.takes.values())).fps),
+        "state_dict": best_state,
+        "best_val": best,
+        "best_epoch": best_epoch,
+        "train_config": asdict(config),
+        "split": asdict(data.split),
+        "history": history,
+        "train_seconds": time.perf_counter() - t0,
+        "n_params": sum(p.numel() for p in model.parameters()),
+    }
+
+
+def save_checkpoint(ckpt: dict, path: str | os.PathLike, *, half: bool = False) -> Path:
+    """Write a checkpoint atomically; ``half`` stores float16 weights (half the size)."""
+    import torch
+
+    from mimika.io.atomic import atomic_write  # noqa: F401  (same folder, same semantics)
+
+    c = dict(ckpt)
+    if half:
+        c["state_dict"] = {k: v.half() if v.is_floating_point() else v
+                           for k, v in c["state_dict"].items()}
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    tmp = p.with_name(f".{p.name}.tmp")
+    torch.save(c, tmp)
+    os.replace(tmp, p)
+    return p
+
+
+def load_model(path: str | os.PathLike):
+    """A model from a checkpoint (eval mode, float32); ``model.checkpoint`` keeps the rest."""
+    import torch
+
+    p = Path(path)
+    if not p.is_file():
+        raise DataError(f"model {str(p)!r} does not exist (train one with 'mimika train "
+                        "transitions --data DIR -o model.pt')")
+    try:
+        ck = torch.load(p, map_location="cpu", weights_only=False)
+        cfg = dict(ck["config"])
+        cfg.pop("n_channels", None)
+        if "noise_fade" in cfg:
+            cfg["noise_fade"] = tuple(cfg["noise_fade"])
+        model = _build(ck["kind"], len(ck["channels"]), cfg)
+        model.load_state_dict({k: v.float() if v.is_floating_point() else v
+                               for k, v in ck["state_dict"].items()})
+    except (KeyError, RuntimeError, OSError, ValueError) as e:
+        raise DataError(f"{p}: not a mimika transition checkpoint ({e})") from None
+    model.eval()
+    model.checkpoint = {k: v for k, v in ck.items() if k != "state_dict"}
+    return model
+
+
+def generate(model, window: np.ndarray, target: np.ndarray, length: int) -> np.ndarray:
+    """Generate ``length`` frames: window (S, K) or (B, S, K), target (K,) or (B, K) →
+    (L, K) or (B, L, K) float32."""
+    import torch
+
+    single = np.ndim(window) == 2
+    w = torch.as_tensor(np.asarray(window, np.float32))
+    g = torch.as_tensor(np.asarray(target, np.float32))
+    if single:
+        w, g = w[None], g[None]
+    n = torch.full((w.shape[0],), int(length), dtype=torch.long)
+    model.eval()
+    with torch.no_grad():
+        out = model(w, g, int(length), n).numpy().astype(np.float32)
+    return out[0] if single else out
