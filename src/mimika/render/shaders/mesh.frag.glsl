@@ -1,7 +1,8 @@
 #version 330
 // Studio lighting in view space: warm key (upper left of the camera), cool fill (right),
 // rim light from behind, hemispheric ambient. Wrap diffuse with a scatter tint for skin,
-// normalised Blinn-Phong specular. Linear lighting, sRGB output.
+// normalised Blinn-Phong specular (key and fill). Linear lighting, sRGB output.
+// Kept cheap: it runs per pixel on llvmpipe (no pow in the sRGB encode, one pow per light).
 in vec3 v_pos;
 in vec3 v_normal;
 
@@ -25,9 +26,14 @@ uniform float u_exposure;
 
 out vec4 f_color;
 
+// Linear to sRGB without pow (fit within ~0.5/255 of the exact curve; llvmpipe-cheap).
 vec3 to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
-    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+    vec3 s1 = sqrt(c);
+    vec3 s2 = sqrt(s1);
+    vec3 s3 = sqrt(s2);
+    return clamp(0.662002687 * s1 + 0.684122060 * s2 - 0.323583601 * s3 - 0.0225411470 * c,
+                 0.0, 1.0);
 }
 
 // Soft shoulder so bright highlights roll off instead of clipping.
@@ -38,16 +44,21 @@ vec3 tonemap(vec3 c) {
     return min(x, knee) + over / (1.0 + over / (1.0 - knee.x));
 }
 
-vec3 shade(vec3 n, vec3 v, vec3 l, vec3 col) {
+vec3 diffuse(vec3 n, vec3 l) {
     float ndl = dot(n, l);
     float lambert = max(ndl, 0.0);
     float wrapped = max((ndl + u_wrap) / (1.0 + u_wrap), 0.0);
-    vec3 diffuse = u_base * (lambert + max(wrapped - lambert, 0.0) * u_scatter);
+    return u_base * (lambert + max(wrapped - lambert, 0.0) * u_scatter);
+}
+
+float specular(vec3 n, vec3 v, vec3 l) {
+    float ndl = max(dot(n, l), 0.0);
     vec3 h = normalize(l + v);
     float norm = (u_shininess + 8.0) / 25.1327;  // (n + 8) / (8 pi)
-    float fres = 1.0 + 2.0 * pow(1.0 - max(dot(v, h), 0.0), 5.0);
-    float spec = u_specular * norm * fres * pow(max(dot(n, h), 0.0), u_shininess) * lambert;
-    return col * (diffuse * u_alpha + vec3(spec));
+    float x = 1.0 - max(dot(v, h), 0.0);
+    float x2 = x * x;
+    float fres = 1.0 + 2.0 * x2 * x2 * x;  // Schlick-style boost at grazing angles
+    return u_specular * norm * fres * pow(max(dot(n, h), 1e-4), u_shininess) * ndl;
 }
 
 void main() {
@@ -58,9 +69,10 @@ void main() {
         facing = u_backface;
     }
     vec3 v = normalize(-v_pos);
-    vec3 c = shade(n, v, u_key_dir, u_key_col)
-           + shade(n, v, u_fill_dir, u_fill_col)
-           + shade(n, v, u_rim_dir, u_rim_col);
+    // key and fill: diffuse + specular; rim: diffuse only (it lights silhouettes)
+    vec3 c = u_key_col * (diffuse(n, u_key_dir) * u_alpha + specular(n, v, u_key_dir))
+           + u_fill_col * (diffuse(n, u_fill_dir) * u_alpha + specular(n, v, u_fill_dir))
+           + u_rim_col * diffuse(n, u_rim_dir) * u_alpha;
     vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * u_base * u_alpha;
     c = (c + ambient) * facing;
     f_color = vec4(to_srgb(tonemap(c)), u_alpha);
