@@ -20,6 +20,8 @@ demo: setup
 
 test: setup
 	bash scripts/setup-node.sh
+	bash scripts/setup-studio.sh
+	bash scripts/setup-browser.sh
 	$(BIN)/ruff check src tests bench
 	$(BIN)/python -m pytest -q
 

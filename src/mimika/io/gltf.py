@@ -32,6 +32,7 @@ import json
 import logging
 import os
 import struct
+import weakref
 from pathlib import Path
 from typing import Any
 
@@ -166,6 +167,30 @@ class _Builder:
         return len(self.accessors) - 1
 
 
+_DELTAS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _morph_deltas(rig: Rig, codes: tuple[str, ...]) -> dict[str, list[tuple[str, np.ndarray]]]:
+    """Morph target deltas per object — the rig at τ = 1 minus rest, in metres — cached per
+    rig (they depend only on the rig), so repeated exports do not recompute them."""
+    cache = _DELTAS.setdefault(rig, {})
+    if codes not in cache:
+        head, rest = rig.head, rig.head.rest
+        deltas: dict[str, list[tuple[str, np.ndarray]]] = {o.name: [] for o in head.objects}
+        for code in codes:
+            pos = rig.deform({code: 1.0})
+            for o in head.objects:
+                if o.category == "eyes" and code[:4] in _EYE_AUS:
+                    continue  # eyeballs turn as nodes
+                d = (pos[o.name] - rest[o.name]).astype(np.float32)
+                if np.abs(d).max() > 1e-6:
+                    d *= SCALE
+                    d.setflags(write=False)
+                    deltas[o.name].append((code, d))
+        cache[codes] = deltas
+    return cache[codes]
+
+
 def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = None
                ) -> tuple[dict, bytes]:
     """The glTF JSON document and its binary buffer for ``rig``'s head (+ ``track``)."""
@@ -174,7 +199,6 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
     mats_src = _materials()
     motion = rig_motion(rig)
     sup = [c for c in rig.supported if c[:4] not in _HEAD_AUS]
-    rest = head.rest
 
     # materials
     materials: list[dict] = []
@@ -198,16 +222,7 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
         mat_index[name_] = len(materials) - 1
         return mat_index[name_]
 
-    # morph target deltas: the rig at τ = 1 minus rest, per object
-    deltas: dict[str, list[tuple[str, np.ndarray]]] = {o.name: [] for o in head.objects}
-    for code in sup:
-        pos = rig.deform({code: 1.0})
-        for o in head.objects:
-            if o.category == "eyes" and code[:4] in _EYE_AUS:
-                continue  # eyeballs turn as nodes
-            d = (pos[o.name] - rest[o.name]).astype(np.float32)
-            if np.abs(d).max() > 1e-6:
-                deltas[o.name].append((code, d * SCALE))
+    deltas = _morph_deltas(rig, tuple(sup))
 
     nodes: list[dict] = [{"name": "neck"}, {"name": "head"}]
     neck_base = np.asarray(head.anchors.get("neck_base", motion["pivot"] - [0, 8, 0]), float)

@@ -1,0 +1,64 @@
+"""``mimika studio``: the web editor (AU designer, expression library, timeline, live speech)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from mimika.errors import ParameterError
+
+LOOPBACK = ("127.0.0.1", "localhost", "::1")
+
+
+def default_projects_dir() -> Path:
+    from mimika.knowledge.expressions import default_library_path
+
+    return default_library_path().parent / "projects"
+
+
+def cmd_studio(args: argparse.Namespace) -> int:
+    try:
+        import fastapi  # noqa: F401
+        import uvicorn
+    except ImportError:
+        raise ParameterError("mimika studio needs FastAPI and uvicorn: "
+                             "pip install 'mimika[studio]'") from None
+    from mimika.studio.app import MAX_BODY, create_app
+    from mimika.studio.assets import ensure_vendor
+
+    if not 1 <= args.port <= 65535:
+        raise ParameterError(f"--port {args.port} must be within 1…65535")
+    ensure_vendor()
+    projects = Path(args.projects) if args.projects else default_projects_dir()
+    app = create_app(projects, head=args.head, library_path=args.library, warm_up=True)
+    host = args.host
+    url = f"http://{'[' + host + ']' if ':' in host else host}:{args.port}/"
+    if host not in LOOPBACK:
+        print(f"mimika studio: warning: listening on {host}; anyone who can reach it can edit "
+              "your projects (there is no login)", file=sys.stderr)
+    print(f"mimika studio on {url} (projects in {projects}); Ctrl-C stops it", file=sys.stderr)
+    if not args.no_browser:
+        import threading
+        import webbrowser
+
+        threading.Timer(1.0, webbrowser.open, args=(url,)).start()
+    uvicorn.run(app, host=host, port=args.port, log_level="warning" if args.quiet else "info",
+                ws_max_size=MAX_BODY)
+    return 0
+
+
+def register(sub) -> None:
+    q = sub.add_parser("studio", help="start the web editor (AU sliders, expressions, timeline, "
+                                      "live speech) in the browser")
+    q.add_argument("--port", type=int, default=8765, help="TCP port (default 8765)")
+    q.add_argument("--host", default="127.0.0.1",
+                   help="address to bind (default 127.0.0.1: this computer only)")
+    q.add_argument("--projects", metavar="DIR",
+                   help="folder of project files (default: ~/.local/share/mimika/projects)")
+    q.add_argument("--head", default="builtin", choices=("builtin", "ict"))
+    q.add_argument("--library", metavar="FILE",
+                   help="user expression library (default: ~/.local/share/mimika/expressions.json)")
+    q.add_argument("--no-browser", action="store_true", help="do not open a browser window")
+    q.add_argument("-q", "--quiet", action="store_true")
+    q.set_defaults(func=cmd_studio)

@@ -1,0 +1,15 @@
+"""The studio's API routers, one module per topic."""
+
+from mimika.studio.routers import (
+    export,
+    expressions,
+    face,
+    latent,
+    projects,
+    speech,
+)
+
+ROUTERS = (face.router, expressions.router, projects.router, speech.router, export.router,
+           latent.router)
+
+__all__ = ["ROUTERS"]

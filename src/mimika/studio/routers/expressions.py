@@ -1,0 +1,51 @@
+"""The expression library: list, create from sliders, delete user entries."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter, Request
+
+from mimika.studio.routers._deps import state_of
+from mimika.studio.schemas import ExpressionCreate
+
+router = APIRouter(prefix="/api/expressions", tags=["expressions"])
+
+
+def _out(e: Any) -> dict[str, Any]:
+    d = e.to_dict()
+    d["builtin"] = e.builtin
+    return d
+
+
+@router.get("")
+def list_expressions(request: Request) -> dict[str, Any]:
+    """Every expression (built-ins, then the user's)."""
+    st = state_of(request)
+    with st.library_lock:
+        lib = st.library()
+        return {"expressions": [_out(e) for e in lib.list()], "user": lib.user_names()}
+
+
+@router.post("", status_code=201)
+def create_expression(req: ExpressionCreate, request: Request) -> dict[str, Any]:
+    """Save the sliders as a user expression (atomic write of the user library)."""
+    st = state_of(request)
+    with st.library_lock:
+        e = st.library().create(req.name, req.aus, onset=req.onset, duration=req.duration,
+                                offset=req.offset, description=req.description,
+                                force=req.force)
+    return _out(e)
+
+
+@router.delete("/{name:path}")
+def delete_expression(name: str, request: Request) -> dict[str, Any]:
+    """Remove a user expression."""
+    if len(name) > 64:
+        from mimika.errors import ParameterError
+
+        raise ParameterError("expression name is longer than 64 characters")
+    st = state_of(request)
+    with st.library_lock:
+        st.library().delete(name)
+    return {"deleted": name}

@@ -1,0 +1,218 @@
+"""Server-side state of one studio: the head (rig + GLB), the expression library, a speech
+cache, the optional WGAN controller and feature flags. Thread-safe; heavy parts load lazily."""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mimika.errors import DataError, MimikaError
+
+log = logging.getLogger(__name__)
+
+#: newsreader modules that may offer their own MP4 export (``render_project(project, path)``)
+VIDEO_MODULES = ("mimika.news", "mimika.newsreader")
+
+
+@dataclass
+class SpeechSegment:
+    """One synthesised sentence placed at ``t0`` seconds of the whole utterance."""
+
+    text: str
+    char0: int
+    t0: float
+    utterance: Any  # mimika.speech.Utterance (sentence-local times)
+    mouth: Any  # AUTrack of the sentence's mouth AUs (sentence-local)
+
+    @property
+    def duration(self) -> float:
+        return float(self.utterance.duration)
+
+
+@dataclass
+class SpeechEntry:
+    """A spoken text: its segments in order (complete once ``done``)."""
+
+    key: str
+    text: str
+    lang: str
+    rate: int
+    segments: list[SpeechSegment] = field(default_factory=list)
+    done: bool = False
+
+    @property
+    def duration(self) -> float:
+        return sum(s.duration for s in self.segments)
+
+    def audio(self) -> tuple[np.ndarray, int]:
+        sr = self.segments[0].utterance.sr if self.segments else 22050
+        parts = [s.utterance.audio for s in self.segments]
+        return (np.concatenate(parts) if parts else np.zeros(0, np.float32)), int(sr)
+
+
+def gltf_bytes(rig: Any, track: Any, *, name: str = "mimika") -> bytes:
+    """``rig``'s head (+ ``track``'s animation) as GLB bytes, through :func:`write_gltf`."""
+    import tempfile
+
+    from mimika.io.gltf import write_gltf
+
+    with tempfile.TemporaryDirectory(prefix="mimika-studio-") as d:
+        return write_gltf(Path(d) / f"{name}.glb", rig, track).read_bytes()
+
+
+def speech_key(text: str, lang: str, rate: int) -> str:
+    h = hashlib.sha1(f"{lang}|{rate}|{text}".encode()).hexdigest()
+    return h[:20]
+
+
+class StudioState:
+    """Everything the routers share.
+
+    Parameters
+    ----------
+    projects_dir : folder of project JSON files (created if missing)
+    head : ``builtin`` or ``ict``
+    library_path : the user expression library (default: the user's library)
+    """
+
+    def __init__(self, projects_dir: str | Path, *, head: str = "builtin",
+                 library_path: str | Path | None = None, controller_path: str | Path | None = None,
+                 speech_cache: int = 32):
+        self.projects_dir = Path(projects_dir)
+        self.projects_dir.mkdir(parents=True, exist_ok=True)
+        if head not in ("builtin", "ict"):
+            raise DataError(f"studio head {head!r} must be 'builtin' or 'ict'")
+        self.head_name = head
+        self.library_path = Path(library_path) if library_path is not None else None
+        self.controller_path = controller_path
+        self._head_lock = threading.Lock()
+        self._rig: Any = None
+        self._glb: bytes | None = None
+        self._glb_etag = ""
+        self._lib_lock = threading.Lock()
+        self.espeak_lock = threading.Lock()  # espeak-ng is not re-entrant
+        self._speech: OrderedDict[str, SpeechEntry] = OrderedDict()
+        self._speech_lock = threading.Lock()
+        self._speech_max = speech_cache
+        self._ctl_lock = threading.Lock()
+        self._ctl: Any = None
+        self._ctl_error: str | None = None
+        self._ctl_tried = False
+
+    # -- head ---------------------------------------------------------------------------------
+    def rig(self) -> Any:
+        with self._head_lock:
+            if self._rig is None:
+                from mimika.face.heads import load_head
+
+                _, self._rig = load_head(self.head_name)
+                log.info("studio: loaded head %s", self.head_name)
+            return self._rig
+
+    def glb(self) -> tuple[bytes, str]:
+        """The head as GLB (no animation) and its ETag; built once."""
+        rig = self.rig()
+        with self._head_lock:
+            if self._glb is None:
+                self._glb = gltf_bytes(rig, None, name=self.head_name)
+                self._glb_etag = '"' + hashlib.sha1(self._glb).hexdigest()[:16] + '"'
+            return self._glb, self._glb_etag
+
+    def head_info(self) -> dict[str, Any]:
+        """Supported AUs by FACS group and the rigid motions the page applies to joints."""
+        from mimika.facs import AU_CATALOGUE
+        from mimika.io.gltf import SCALE, rig_motion
+
+        rig = self.rig()
+        motion = rig_motion(rig)
+        sup = list(rig.supported)
+        groups: dict[str, list[dict[str, Any]]] = {g: [] for g in GROUPS}
+        for code in sup:
+            if len(code) != 4:
+                continue
+            a = AU_CATALOGUE[code]
+            if a.group in groups:
+                groups[a.group].append({"code": code, "name": a.name,
+                                        "sided": bool(a.sided and code + "L" in sup)})
+        return {
+            "head": self.head_name,
+            "aus": sup,
+            "groups": [{"name": g, "aus": v} for g, v in groups.items() if v],
+            "motion": {k: {c: [float(x) for x in np.asarray(v).ravel()]
+                           for c, v in motion[k].items()}
+                       for k in ("head_rot", "head_tr", "eye_rot")},
+            "scale": SCALE,
+        }
+
+    # -- expression library ------------------------------------------------------------------
+    def library(self) -> Any:
+        from mimika.knowledge import ExpressionLibrary
+
+        return ExpressionLibrary(self.library_path)
+
+    @property
+    def library_lock(self) -> threading.Lock:
+        return self._lib_lock
+
+    # -- speech cache -------------------------------------------------------------------------
+    def put_speech(self, entry: SpeechEntry) -> None:
+        with self._speech_lock:
+            self._speech[entry.key] = entry
+            self._speech.move_to_end(entry.key)
+            while len(self._speech) > self._speech_max:
+                self._speech.popitem(last=False)
+
+    def get_speech(self, key: str) -> SpeechEntry | None:
+        with self._speech_lock:
+            e = self._speech.get(key)
+            if e is not None:
+                self._speech.move_to_end(key)
+            return e
+
+    # -- optional features -------------------------------------------------------------------
+    def controller(self) -> tuple[Any, str | None]:
+        """The WGAN latent controller, or (None, reason) when mimika.learn or a model is missing."""
+        with self._ctl_lock:
+            if not self._ctl_tried:
+                self._ctl_tried = True
+                try:
+                    from mimika.learn.controller import Controller
+
+                    self._ctl = Controller.load(self.controller_path)
+                except (ImportError, MimikaError, OSError, RuntimeError, KeyError,
+                        ValueError) as e:
+                    self._ctl_error = f"latent sliders unavailable: {e}"
+                    log.info("studio: %s", self._ctl_error)
+            return self._ctl, self._ctl_error
+
+    @staticmethod
+    def mp4_unavailable() -> str | None:
+        """None when MP4 export works (studio renderer or a newsreader module), else why not."""
+        from mimika.studio.video import available
+
+        return available()
+
+    @staticmethod
+    def video_module() -> str | None:
+        """Name of an importable newsreader module with its own MP4 export, else None."""
+        import importlib
+
+        for name in VIDEO_MODULES:
+            try:
+                if importlib.util.find_spec(name) is not None and any(
+                        callable(getattr(importlib.import_module(name), f, None))
+                        for f in ("render_project", "render_mp4")):
+                    return name
+            except (ImportError, ValueError, MimikaError):
+                continue
+        return None
+
+
+GROUPS = ("upper face", "lower face linear", "lower face orbital", "head", "eyes")

@@ -1,0 +1,49 @@
+"""MP4 export for the studio: the headless renderer + the MP4 writer (when both are installed)."""
+
+from __future__ import annotations
+
+import importlib.util
+import logging
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+#: longest clip the studio renders in one request (seconds)
+MAX_SECONDS = 60.0
+
+
+def available() -> str | None:
+    """``None`` if MP4 export works here, else the reason it does not."""
+    for mod in ("mimika.render.video", "av", "moderngl"):
+        try:
+            if importlib.util.find_spec(mod) is None:
+                return f"MP4 export isn't available: {mod} is not installed"
+        except (ImportError, ValueError):
+            return f"MP4 export isn't available: {mod} cannot be imported"
+    return None
+
+
+def render_mp4(rig: Any, track: Any, path: str | Path, *, audio: np.ndarray | None = None,
+               sr: int | None = None, size: tuple[int, int] = (640, 480),
+               view: str = "front") -> Path:
+    """Render ``track`` on ``rig``'s head into an H.264/AAC MP4 at ``track.fps`` (atomic)."""
+    from mimika.errors import ParameterError
+    from mimika.render import Renderer
+    from mimika.render.video import VideoWriter
+
+    if track.duration > MAX_SECONDS:
+        raise ParameterError(f"the clip is {track.duration:.1f} s; the studio renders at most "
+                             f"{MAX_SECONDS:.0f} s (use 'mimika render' for longer ones)")
+    w, h = (int(s) // 2 * 2 for s in size)
+    renderer = Renderer(rig.head, size=(w, h), samples=4)
+    try:
+        with VideoWriter(path, fps=track.fps, size=(w, h), audio=audio, sr=sr) as out:
+            for pos in rig.deform_track(track):
+                out.write(renderer.render(pos, view=view))
+    finally:
+        renderer.close()
+    log.info("studio: wrote %s (%d frames)", path, track.n_frames)
+    return Path(path)
