@@ -135,7 +135,7 @@ def test_speak_plays_audio_and_moves_the_mouth(page, record_property):
                            timeout=20_000)
     # replay through <audio>: its currentTime is the clock
     page.click("#btn-play")
-    page.wait_for_function("mimikaStudio.audio().currentTime > 0.3", timeout=10_000)
+    page.wait_for_function("mimikaStudio.audio().currentTime > 0.3", timeout=30_000)
     seen = 0.0
     for _ in range(15):
         seen = max(seen, page.evaluate(mouth))
