@@ -14,9 +14,7 @@ $(VENV)/.installed: pyproject.toml scripts/setup.sh
 	touch $@
 
 demo: setup
-	$(BIN)/mimika pose --grid -o $(OUT)/au-sheet.png
-	$(BIN)/mimika pose --au AU06=0.8 --au AU12=1 --au AU25=0.4 --view three-quarter -o $(OUT)/smile.png
-	@echo "demo: wrote $(OUT)/au-sheet.png and $(OUT)/smile.png"
+	$(BIN)/mimika news --example en -o $(OUT)/news.mp4
 
 test: setup
 	bash scripts/setup-node.sh

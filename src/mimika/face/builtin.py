@@ -726,6 +726,20 @@ def _nearest(V: np.ndarray, cand: np.ndarray, p) -> int:
     return int(cand[np.argmin(d)])
 
 
+def _skin_uvs(S: _Shape, V: np.ndarray, ae: np.ndarray) -> np.ndarray:
+    """Texture coordinates of the skin, shape (N, 2) in [0, 1]: the ray parametrisation the
+    skin is sampled with (azimuth → u, elevation → v, equirectangular around the vertical
+    axis through the head centre), so the only seam runs down the back of the head. Vertices
+    of the pockets behind the openings (not on a ray) use their direction from the centre."""
+    a = np.empty(len(V))
+    e = np.empty(len(V))
+    a[: len(ae)], e[: len(ae)] = ae[:, 0], ae[:, 1]
+    if len(V) > len(ae):
+        pa, pe = S.ae(V[len(ae):])
+        a[len(ae):], e[len(ae):] = pa, pe
+    return np.stack([(a + 180.0) / 360.0, (e + 90.0) / 180.0], 1).astype(np.float32)
+
+
 @functools.lru_cache(maxsize=len(RESOLUTIONS))
 def build_builtin_head(resolution: int = 1) -> Head:
     """The built-in head at ``resolution`` 0 (coarse), 1 (default, < 25k triangles) or 2 (fine).
@@ -779,7 +793,8 @@ def build_builtin_head(resolution: int = 1) -> Head:
             parts[mat].append(f[:, ::-1] if flip else f)
     Vs = np.concatenate(verts)
     skin = MeshObject("skin", "face", Vs, tuple(Part(m, np.concatenate(f))
-                                                 for m, f in parts.items() if f))
+                                                 for m, f in parts.items() if f),
+                      uvs=_skin_uvs(S, Vs, ae))
 
     objects = [skin, _brows(resolution), _eyeball(1, resolution), _eyeball(-1, resolution),
                _teeth("upper", resolution), _teeth("lower", resolution), _tongue(resolution)]

@@ -127,7 +127,7 @@ def vertex_normals(
     fn[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
     fn[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
     n = np.asarray(incidence @ fn, np.float32)
-    n[:, 2] += 1e-30  # zero normals become +z after normalising
+    n[:, 2] += 1e-15  # zero normals become +z after normalising
     n /= np.sqrt(np.einsum("ij,ij->i", n, n))[:, None]
     return n
 
@@ -190,7 +190,7 @@ def _winding_inward(vertices: np.ndarray, faces: np.ndarray) -> bool:
     return float(np.einsum("ij,ij->", fn, (a + b + c) / 3.0 - centre)) < 0.0
 
 
-_GL_KEYS = ("bg_vao", "prog", "bg_prog", "fbo", "resolve")
+_GL_KEYS = ("bg_vao", "prog", "bg_prog", "fbo", "resolve", "desk_vao", "desk_prog")
 
 
 class Renderer:
@@ -204,12 +204,19 @@ class Renderer:
         Image (width, height) in pixels.
     samples
         Multisample anti-aliasing samples (0 disables it).
+    skin_shader
+        Draw skin-like parts with the texture-space skin shader (:mod:`mimika.render.skin`;
+        objects need UVs), else with the standard shader; a ``SkinParams`` turns it on with
+        those settings.
+    lighting
+        Lights and backdrop (:class:`mimika.render.skin.Lighting`); default: mimika's look.
 
     The GL context is created on the first :meth:`render`; ``close()`` (or leaving a
     ``with`` block) frees this renderer's GPU objects.
     """
 
-    def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4) -> None:
+    def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4,
+                 skin_shader: Any = False, lighting: Any = None) -> None:
         try:
             w, h = (int(s) for s in size)
         except (TypeError, ValueError):
@@ -221,6 +228,9 @@ class Renderer:
         self.head = head
         self.size = (w, h)
         self.samples = int(samples)
+        self.skin_shader = skin_shader
+        self.lighting = lighting
+        self._skin: Any = None
         self._cameras: dict[str, Camera] = {}
         self._gl: dict[str, Any] | None = None
         self._objects: list[_GpuObject] = []
@@ -263,6 +273,9 @@ class Renderer:
         try:
             for o in self._objects:
                 o.update(pos.get(o.name))
+            skin = self._skin
+            if skin is not None:
+                skin.prepare(ctx, cam.view_matrix)
             fbo = gl["fbo"]
             fbo.use()
             ctx.viewport = (0, 0, *self.size)
@@ -280,6 +293,9 @@ class Renderer:
                         glass.append((o, mat, first, count))
                         continue
                     self._set_material(prog, mat)
+                    if skin is not None and skin.handles(o, first):
+                        skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE)
+                        continue
                     o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
             if glass:
                 ctx.enable(ctx.BLEND)
@@ -289,6 +305,12 @@ class Renderer:
                     self._set_material(prog, mat)
                     o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
                 ctx.depth_mask = True
+                ctx.disable(ctx.BLEND)
+            if "desk_vao" in gl:
+                ctx.disable(ctx.DEPTH_TEST)
+                ctx.enable(ctx.BLEND)
+                ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
+                gl["desk_vao"].render(ctx.TRIANGLES, vertices=3)
                 ctx.disable(ctx.BLEND)
             if gl["resolve"] is not fbo:
                 ctx.copy_framebuffer(gl["resolve"], fbo)
@@ -302,6 +324,9 @@ class Renderer:
 
     def close(self) -> None:
         """Free this renderer's GPU objects (the shared GL context stays)."""
+        if self._skin is not None:
+            self._skin.release()
+            self._skin = None
         for o in self._objects:
             o.release()
         self._objects = []
@@ -366,6 +391,7 @@ class Renderer:
             vertex_shader=_shader("mesh.vert.glsl"), fragment_shader=_shader("mesh.frag.glsl")
         )
         gl["prog"] = prog
+        lit = self.lighting
         for name, value in (
             ("u_key_dir", _unit(KEY_DIR)),
             ("u_key_col", KEY_COL),
@@ -379,14 +405,25 @@ class Renderer:
             ("u_backface", BACKFACE),
         ):
             prog[name].value = value
+        if lit is not None:
+            from mimika.render.skin import set_lights
+
+            set_lights(prog, lit)
+        studio = lit is not None and lit.backdrop == "studio"
         bg = ctx.program(
             vertex_shader=_shader("background.vert.glsl"),
-            fragment_shader=_shader("background.frag.glsl"),
+            fragment_shader=_shader("studio.frag.glsl" if studio else "background.frag.glsl"),
         )
-        bg["u_top"].value = BG_TOP
-        bg["u_bottom"].value = BG_BOTTOM
-        bg["u_glow"].value = BG_GLOW
+        bg["u_top"].value = BG_TOP if lit is None else lit.bg_top
+        bg["u_bottom"].value = BG_BOTTOM if lit is None else lit.bg_bottom
+        bg["u_glow"].value = BG_GLOW if lit is None else lit.bg_glow
         bg["u_aspect"].value = self.aspect
+        if lit is not None and lit.desk > 0:
+            desk = ctx.program(vertex_shader=_shader("background.vert.glsl"),
+                               fragment_shader=_shader("desk.frag.glsl"))
+            desk["u_top"].value = lit.desk
+            gl["desk_prog"] = desk
+            gl["desk_vao"] = ctx.vertex_array(desk, [])
         gl["bg_prog"] = bg
         gl["bg_vao"] = ctx.vertex_array(bg, [])
 
@@ -409,6 +446,16 @@ class Renderer:
             gl["fbo"] = gl["resolve"] = ctx.framebuffer(resolve_color, depth)
 
         self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects if o.parts]
+        if self.skin_shader:
+            from mimika.render.skin import DEFAULT_LIGHTING, SkinShader
+
+            uvs = {o.name: o.uvs for o in self.head.objects if o.uvs is not None}
+            if uvs:
+                params = None if isinstance(self.skin_shader, bool) else self.skin_shader
+                self._skin = SkinShader(ctx, self._objects, uvs, lit or DEFAULT_LIGHTING,
+                                        params)
+            else:
+                log.warning("head %r has no UVs: skin shader off", self.head.name)
         log.debug(
             "renderer for %r: %d objects, %d triangles, %dx%d, %d samples",
             self.head.name,

@@ -1,0 +1,141 @@
+"""Articles: plain text (paragraphs separated by blank lines) or a mimika script (``<speak>``),
+and their synthesis into one utterance with newsreader pauses between sentences/paragraphs."""
+
+from __future__ import annotations
+
+import logging
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from mimika.errors import ParameterError
+
+log = logging.getLogger(__name__)
+
+#: silence added between sentences / paragraphs (s), on top of the TTS's own
+SENTENCE_GAP = 0.22
+PARAGRAPH_GAP = 0.65
+LEAD_IN = 0.45  # silence before the first word (the reader looks up, then speaks)
+TAIL = 0.9  # after the last word (a smile, a nod)
+
+
+@dataclass(frozen=True)
+class Article:
+    """``paragraphs`` of plain text; ``script`` holds the parsed timeline of a ``<speak>``
+    script (its spoken text is the single paragraph), else None."""
+
+    paragraphs: tuple[str, ...]
+    script: Any = None
+    source: str = "<article>"
+
+    @property
+    def text(self) -> str:
+        return "\n\n".join(self.paragraphs)
+
+
+def is_script(text: str) -> bool:
+    """True if ``text`` is a mimika script (an XML document with a ``<speak`` element)."""
+    return re.search(r"<speak[\s>/]", text) is not None
+
+
+def parse_article(text: str, *, source: str = "<article>") -> Article:
+    """An :class:`Article` from plain text or script text; empty input raises ParameterError."""
+    if not isinstance(text, str) or not text.strip():
+        raise ParameterError(f"article {source} is empty; give at least one sentence to read")
+    if is_script(text):
+        from mimika.markup import parse_script
+
+        tl = parse_script(text, source=source)
+        spoken = tl.speech.text.strip()
+        if not spoken:
+            raise ParameterError(f"script {source} has no text to speak inside <speak>")
+        paras = tuple(p for p in (" ".join(x.split()) for x in re.split(r"\n\s*\n", spoken))
+                      if p)
+        return Article(paras, tl, source)
+    paras = tuple(" ".join(p.split()) for p in re.split(r"\n\s*\n", text.strip()))
+    return Article(tuple(p for p in paras if p), None, source)
+
+
+def _shift(utt: Any, dt: float, char0: int) -> tuple[list, list, list]:
+    from mimika.speech import Phone, Sentence, Word
+
+    ph = [Phone(p.symbol, p.start + dt, p.end + dt, p.stress) for p in utt.phonemes]
+    ws = [Word(w.text, w.start + dt, w.end + dt, w.offset + char0 if w.offset >= 0 else -1)
+          for w in utt.words]
+    ss = [Sentence(s.text, s.start + dt, s.end + dt) for s in utt.sentences]
+    return ph, ws, ss
+
+
+def speak_article(article: Article, *, lang: str = "en", voice: str | None = None,
+                  rate: int = 165, pitch: int = 50, sentence_gap: float = SENTENCE_GAP,
+                  paragraph_gap: float = PARAGRAPH_GAP) -> tuple[Any, list[float]]:
+    """Synthesise every sentence with espeak-ng and join them with pauses.
+
+    Returns ``(utterance, paragraph_starts)``: one :class:`~mimika.speech.Utterance` (audio
+    float32 mono at ``sr``, phones tiling it, words and sentences in seconds) and the start
+    times (s) of the first sentence of every paragraph.
+    """
+    from mimika.speech import Phone, Sentence, Utterance, synthesize
+    from mimika.speech.tts import split_sentences
+
+    chunks: list[np.ndarray] = []
+    phones: list = []
+    words: list = []
+    sents: list = []
+    para_starts: list[float] = []
+    sr = None
+    t = 0.0
+    char_base = 0
+    full = article.text
+
+    def silence(d: float) -> None:
+        nonlocal t
+        n = round(d * (sr or 22050))
+        if n <= 0:
+            return
+        chunks.append(np.zeros(n, np.float32))
+        d = n / (sr or 22050)
+        if phones and phones[-1].is_pause:
+            phones[-1] = Phone("_", phones[-1].start, phones[-1].end + d)
+        else:
+            phones.append(Phone("_", t, t + d))
+        t += d
+
+    for _pi, para in enumerate(article.paragraphs):
+        pieces = split_sentences(para) or [(para, 0)]
+        for si, (sent, off) in enumerate(pieces):
+            u = synthesize(sent, lang=lang, voice=voice, rate=rate, pitch=pitch)
+            if sr is None:
+                sr = u.sr
+                silence(LEAD_IN)
+            elif si == 0:
+                silence(paragraph_gap)
+            else:
+                silence(sentence_gap)
+            if si == 0:
+                para_starts.append(t)
+            ph, ws, _ = _shift(u, t, char_base + off)
+            if phones and ph and phones[-1].is_pause and ph[0].is_pause:
+                phones[-1] = Phone("_", phones[-1].start, ph[0].end)
+                ph = ph[1:]
+            phones += ph
+            words += ws
+            chunks.append(u.audio.astype(np.float32))
+            t0, t = t, t + len(u.audio) / u.sr
+            sents.append(Sentence(sent, t0, t))  # the sentence spans its synthesised chunk
+        char_base += len(para) + 2
+    silence(TAIL)
+    audio = np.concatenate(chunks).astype(np.float32)
+    # phones must end exactly at the audio's end
+    dur = len(audio) / sr
+    if phones:
+        last = phones[-1]
+        phones[-1] = Phone(last.symbol, last.start, dur, last.stress)
+    utt = Utterance(audio, int(sr), phones, words, sents, lang=lang, text=full,
+                    meta={"source": "espeak-ng", "voice": voice or lang, "rate": rate,
+                          "pitch": pitch})
+    log.debug("article: %d paragraphs, %d sentences, %.2f s", len(article.paragraphs),
+              len(sents), dur)
+    return utt, para_starts

@@ -1,0 +1,317 @@
+"""The newsreader pipeline: article → speech → behaviour → AU track → frames → MP4 + SRT."""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mimika.errors import DataError, ParameterError
+from mimika.newsreader.article import Article, parse_article, speak_article
+from mimika.tracks import AUTrack, valid_fps
+
+log = logging.getLogger(__name__)
+
+#: every feature of the newsreader; "skin" is the skin shader, the rest are behaviour layers
+FEATURES = ("head", "gaze", "blink", "idle", "brows", "smile", "knowledge", "skin")
+#: the seed's ablation set: each of these switched off once (plus the all-features video)
+ABLATIONS = ("head", "gaze", "blink", "idle", "skin", "brows", "smile")
+#: CLI / file names of the features
+FLAG_NAMES = {"head": "head-motion", "gaze": "gaze", "blink": "blink", "idle": "idle",
+              "brows": "brows", "smile": "smile", "knowledge": "knowledge",
+              "skin": "skin-shader"}
+#: how much of the image height the face (hairline to chin) fills
+FILL = 0.62
+
+Progress = Callable[[int, int], None]
+
+
+def check_layers(layers: Iterable[str] | None) -> frozenset[str]:
+    """The enabled features (default: all of :data:`FEATURES`); unknown names raise."""
+    if layers is None:
+        return frozenset(FEATURES)
+    out = frozenset(layers)
+    bad = sorted(out - set(FEATURES))
+    if bad:
+        raise ParameterError(f"unknown newsreader feature(s) {', '.join(bad)}; "
+                             f"features: {', '.join(FEATURES)}")
+    return out
+
+
+@dataclass
+class NewsTrack:
+    """The animation of an article: the final AU ``track``, the speech ``utterance``, the
+    behaviour ``layers`` (name → AUTrack) and the ``paragraph_starts`` (s)."""
+
+    track: AUTrack
+    utterance: Any
+    layers: dict[str, AUTrack]
+    paragraph_starts: list[float]
+    mouth: AUTrack
+
+
+@dataclass
+class NewsResult:
+    """What :func:`render_news` wrote, with per-stage wall times (s) in ``timings``."""
+
+    video: Path
+    subtitles: Path | None
+    duration: float
+    n_frames: int
+    fps: float
+    timings: dict[str, float] = field(default_factory=dict)
+    aus: Path | None = None
+    track: AUTrack | None = None
+
+
+def _retime_script(article: Article, utt: Any, *, fps: float, n_frames: int) -> AUTrack | None:
+    """The script's own events, moved from text timing to the speech's word times."""
+    from dataclasses import replace
+
+    from mimika.timeline.player import sample
+    from mimika.timeline.speech import time_speech
+
+    tl = article.script
+    if tl is None or not tl.channels:
+        return None
+    text_words = time_speech(tl.speech, rate=tl.rate).words
+    tw = np.array([w.start for w in text_words] + [text_words[-1].end]) if text_words else None
+    aw = np.array([w.start for w in utt.words] + [utt.words[-1].end]) if utt.words else None
+    if tw is not None and aw is not None and len(tw) == len(aw):
+        src, dst = tw, aw
+    else:  # word counts differ (numbers, abbreviations): stretch text time linearly
+        end = tl.speech_end() or tl.end
+        src = np.array([0.0, max(end, 1e-3)])
+        dst = np.array([utt.words[0].start if utt.words else 0.0,
+                        utt.words[-1].end if utt.words else utt.duration])
+    order = np.argsort(src, kind="stable")
+    src, dst = src[order], dst[order]
+
+    def f(x: float) -> float:
+        return float(np.interp(x, src, dst, left=dst[0] + x - src[0],
+                               right=dst[-1] + x - src[-1]))
+
+    chans = []
+    for ch in tl.channels:
+        evs = []
+        for e in ch.events:
+            s, t = max(f(e.start), 0.0), max(f(e.end), 0.0)
+            if t - s < 0.04:
+                t = s + max(e.duration, 0.04)
+            evs.append(replace(e, start=s, duration=t - s, onset=None if e.onset is None else
+                               min(e.onset, 0.5 * (t - s)), offset=None if e.offset is None
+                               else min(e.offset, 0.5 * (t - s)), at=None))
+        chans.append(replace(ch, events=tuple(evs)))
+    tr = sample(tl.with_channels(chans), fps=fps, duration=n_frames / fps)
+    v = tr.values[:n_frames]
+    return AUTrack(v, tr.channels, fps, {"layer": "script"})
+
+
+def news_track(article: Article | str, *, lang: str = "en", fps: float = 25.0,
+               layers: Iterable[str] | None = None, voice: str | None = None,
+               rate: int = 165, pitch: int = 50, seed: int | None = None,
+               params: dict[str, Any] | None = None, supported: Iterable[str] | None = None,
+               utterance: Any = None, paragraph_starts: list[float] | None = None
+               ) -> NewsTrack:
+    """Speech, behaviour layers and the final blended AU track of an article.
+
+    ``utterance`` (with ``paragraph_starts``) reuses an earlier synthesis. ``supported``
+    restricts the final channels to what a rig models. The final track has
+    ``ceil(duration · fps)`` frames, frame i at i / fps s.
+    """
+    from mimika.behaviour import behaviour_layers, cues_from_utterance, merge_layers
+    from mimika.facs.blender import blend_track
+    from mimika.speech import combine, mouth_track
+
+    fps = valid_fps(fps)
+    enabled = check_layers(layers)
+    art = parse_article(article) if isinstance(article, str) else article
+    if utterance is None:
+        utterance, paragraph_starts = speak_article(art, lang=lang, voice=voice, rate=rate,
+                                                    pitch=pitch)
+    paras = list(paragraph_starts or [])
+    cues = cues_from_utterance(utterance, paragraph_starts=paras)
+    mouth = mouth_track(utterance, fps=fps)
+    n = mouth.n_frames
+    beh = behaviour_layers(cues, fps=fps, seed=seed, params=params,
+                           layers=[x for x in enabled if x != "skin"])
+    parts = dict(beh)
+    script = _retime_script(art, utterance, fps=fps, n_frames=n)
+    if script is not None and script.channels:
+        parts["script"] = script
+    emotion = merge_layers(parts, params=params, n_frames=n, fps=fps)
+    track = blend_track(combine(mouth, emotion)) if emotion.channels else blend_track(mouth)
+    if supported is not None:
+        sup = set(supported)
+        dropped = [c for c in track.channels if c not in sup]
+        if dropped:
+            log.info("the head does not model %s; left out", ", ".join(dropped))
+        track = track.with_channels([c for c in track.channels if c in sup])
+    track = AUTrack(track.values[:n], track.channels, fps,
+                    {"source": "mimika.newsreader", "lang": utterance.lang,
+                     "layers": sorted(enabled)})
+    return NewsTrack(track, utterance, beh, paras, mouth)
+
+
+def _check_output(out: Path) -> None:
+    if out.suffix.lower() != ".mp4":
+        raise ParameterError(f"output {str(out)!r} must be an .mp4 file")
+    parent = out.parent if str(out.parent) else Path(".")
+    probe_dir = parent
+    while not probe_dir.exists():
+        probe_dir = probe_dir.parent
+    if not probe_dir.is_dir() or not os.access(probe_dir, os.W_OK | os.X_OK):
+        raise DataError(f"cannot write {str(out)!r}: {str(probe_dir)!r} is not a writable "
+                        "folder; choose another output path with -o")
+    if out.is_dir():
+        raise DataError(f"cannot write {str(out)!r}: it is a folder")
+    try:  # fail now, not after minutes of rendering
+        parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=parent):
+            pass
+    except OSError as e:
+        raise DataError(f"cannot write {str(out)!r}: {e.strerror or e}; choose another "
+                        "output path with -o") from None
+
+
+def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str = "front",
+                  samples: int = 0, skin_shader: bool = True, chunk: int = 50,
+                  timings: dict[str, float] | None = None):
+    """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head."""
+    from mimika.render import Renderer
+    from mimika.render.camera import frame_head
+    from mimika.render.skin import NEWS_LIGHTING
+
+    tm = timings if timings is not None else {}
+    w, h = size
+    cam = frame_head(rig.head, view, aspect=w / h, fill=FILL)
+    with Renderer(rig.head, size=size, samples=samples, skin_shader=skin_shader,
+                  lighting=NEWS_LIGHTING) as r:
+        for i0 in range(0, track.n_frames, chunk):
+            t0 = time.perf_counter()
+            pos = rig.deform_batch(track.values[i0:i0 + chunk], track.channels)
+            tm["deform"] = tm.get("deform", 0.0) + time.perf_counter() - t0
+            for k in range(len(next(iter(pos.values())))):
+                t0 = time.perf_counter()
+                img = r.render({name: p[k] for name, p in pos.items()}, camera=cam)
+                tm["render"] = tm.get("render", 0.0) + time.perf_counter() - t0
+                yield img
+
+
+def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en",
+                head: str = "builtin", layers: Iterable[str] | None = None,
+                progress: Progress | None = None, fps: float = 25.0,
+                size: tuple[int, int] = (640, 480), view: str = "front",
+                voice: str | None = None, rate: int = 165, samples: int = 0,
+                seed: int | None = None, subtitles: bool = True,
+                aus: str | os.PathLike | None = None, crf: int = 23,
+                preset: str = "veryfast", rig: Any = None, news: NewsTrack | None = None
+                ) -> NewsResult:
+    """Read ``text`` (plain article or ``<speak>`` script) as a newsreader into an MP4.
+
+    Writes ``out`` (H.264 yuv420p + AAC, ``fps`` frames/s, frame i showing time i / fps, video
+    duration = audio duration within one frame), ``out`` with ``.srt`` (one cue per sentence)
+    unless ``subtitles=False``, and the final AU track as CSV to ``aus`` if given. All files
+    are written atomically. ``layers``: enabled features of :data:`FEATURES` (default all).
+    ``rig``/``news`` reuse a loaded head / a computed :class:`NewsTrack` (ablations).
+    """
+    from mimika.render.video import VideoWriter
+
+    out = Path(out)
+    _check_output(out)
+    w, h = (int(x) for x in size)
+    if w % 2 or h % 2:
+        raise ParameterError(f"size={w}x{h}: width and height must be even for H.264 video")
+    enabled = check_layers(layers)
+    fps = valid_fps(fps)
+    tm: dict[str, float] = {}
+    t_all = time.perf_counter()
+    if rig is None:
+        from mimika.face.heads import load_head
+
+        t0 = time.perf_counter()
+        _, rig = load_head(head)
+        tm["load_head"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    if news is None:
+        art = parse_article(text, source="<article>") if isinstance(text, str) else text
+        t1 = time.perf_counter()
+        utt, paras = speak_article(art, lang=lang, voice=voice, rate=rate)
+        tm["tts"] = time.perf_counter() - t1
+        t1 = time.perf_counter()
+        news = news_track(art, lang=lang, fps=fps, layers=enabled, seed=seed,
+                          supported=rig.supported, utterance=utt, paragraph_starts=paras)
+        tm["tracks"] = time.perf_counter() - t1
+    else:
+        news = news_track(text if isinstance(text, Article) else parse_article(text),
+                          lang=lang, fps=fps, layers=enabled, seed=seed,
+                          supported=rig.supported, utterance=news.utterance,
+                          paragraph_starts=news.paragraph_starts)
+        tm["tracks"] = time.perf_counter() - t0
+    track, utt = news.track, news.utterance
+    n = track.n_frames
+    # pad the audio to the video's length so both streams end together
+    audio = np.zeros(round(n / fps * utt.sr), np.float32)
+    audio[: min(len(audio), len(utt.audio))] = utt.audio[: len(audio)]
+    with VideoWriter(out, fps=fps, size=(w, h), audio=audio, sr=utt.sr, crf=crf,
+                     preset=preset) as vw:
+        for i, img in enumerate(render_frames(rig, track, size=(w, h), view=view,
+                                              samples=samples, skin_shader="skin" in enabled,
+                                              timings=tm)):
+            vw.write(img)
+            if progress is not None:
+                progress(i + 1, n)
+        t0 = time.perf_counter()
+    tm["encode_wait"] = time.perf_counter() - t0
+    tm["encode"] = vw.encode_seconds
+    srt = None
+    if subtitles:
+        from mimika.newsreader.subtitles import sentence_cues, write_srt
+
+        srt = out.with_suffix(".srt")
+        write_srt(srt, sentence_cues(utt))
+    aus_path = None
+    if aus is not None:
+        from mimika.io.tracks import write_track
+
+        aus_path = Path(aus)
+        write_track(track, aus_path, format="au")
+    tm["total"] = time.perf_counter() - t_all
+    log.info("news video %s: %d frames, %.2f s audio, %.1f s wall", out, n, utt.duration,
+             tm["total"])
+    return NewsResult(out, srt, utt.duration, n, fps, tm, aus_path, track)
+
+
+def render_ablations(text: str | Article, *, out_dir: str | os.PathLike, stem: str = "news",
+                     progress: Callable[[str, int, int], None] | None = None,
+                     **kwargs: Any) -> list[NewsResult]:
+    """The seed 004 ablation set: all features, then each of :data:`ABLATIONS` switched off,
+    as ``{stem}_all.mp4`` and ``{stem}_no-{feature}.mp4`` in ``out_dir`` (one synthesis)."""
+    from mimika.face.heads import load_head
+
+    d = Path(out_dir)
+    kwargs.pop("layers", None)
+    _, rig = load_head(kwargs.pop("head", "builtin"))
+    art = parse_article(text) if isinstance(text, str) else text
+    lang = kwargs.get("lang", "en")
+    utt, paras = speak_article(art, lang=lang, voice=kwargs.get("voice"),
+                               rate=kwargs.get("rate", 165))
+    base = NewsTrack(None, utt, {}, paras, None)  # type: ignore[arg-type]
+    results = []
+    variants = [("all", frozenset(FEATURES))] + [
+        (f"no-{FLAG_NAMES[a]}", frozenset(FEATURES) - {a}) for a in ABLATIONS]
+    for name, feats in variants:
+        cb = None
+        if progress is not None:
+            def cb(done: int, total: int, name: str = name) -> None:
+                progress(name, done, total)
+        results.append(render_news(art, out=d / f"{stem}_{name}.mp4", layers=feats, rig=rig,
+                                   news=base, progress=cb, **kwargs))
+    return results

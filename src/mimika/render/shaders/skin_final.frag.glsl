@@ -1,0 +1,81 @@
+#version 330
+// Skin pass (c): albedo × scattered irradiance + specular. The diffuse light is a per-channel
+// mix of the sharp per-pixel irradiance and the texture-space blurred one (red scatters
+// farthest: softer, warmer terminator); specular is Torrance–Sparrow with a Beckmann
+// distribution, Schlick Fresnel (skin F0 = 0.028) and the Kelemen–Szirmay-Kalos visibility.
+in vec3 v_pos;
+in vec3 v_normal;
+in vec2 v_uv;
+
+uniform sampler2D u_irr;
+uniform vec3 u_base;
+uniform float u_specular;
+uniform float u_roughness;
+uniform float u_wrap;
+uniform vec3 u_scatter;
+uniform vec3 u_mix;        // share of blurred irradiance per channel
+uniform float u_backface;
+
+uniform vec3 u_key_dir;
+uniform vec3 u_key_col;
+uniform vec3 u_fill_dir;
+uniform vec3 u_fill_col;
+uniform vec3 u_rim_dir;
+uniform vec3 u_rim_col;
+uniform vec3 u_sky;
+uniform vec3 u_ground;
+uniform float u_exposure;
+
+out vec4 f_color;
+
+vec3 to_srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+
+vec3 tonemap(vec3 c) {
+    vec3 x = c * u_exposure;
+    vec3 knee = vec3(0.8);
+    vec3 over = max(x - knee, 0.0);
+    return min(x, knee) + over / (1.0 + over / (1.0 - knee.x));
+}
+
+vec3 wrapped(vec3 n, vec3 l, vec3 col) {
+    float ndl = dot(n, l);
+    float lambert = max(ndl, 0.0);
+    float w = max((ndl + u_wrap) / (1.0 + u_wrap), 0.0);
+    return col * (lambert + max(w - lambert, 0.0) * u_scatter);
+}
+
+vec3 specular(vec3 n, vec3 v, vec3 l, vec3 col) {
+    float ndl = dot(n, l);
+    if (ndl <= 0.0) return vec3(0.0);
+    vec3 hu = l + v;
+    vec3 h = normalize(hu);
+    float ndh = max(dot(n, h), 1e-4);
+    float m2 = u_roughness * u_roughness;
+    float t2 = (1.0 - ndh * ndh) / (ndh * ndh);
+    float d = exp(-t2 / m2) / (3.14159 * m2 * ndh * ndh * ndh * ndh);
+    float f = 0.028 + 0.972 * pow(1.0 - max(dot(h, v), 0.0), 5.0);
+    return col * (u_specular * d * f * ndl * 4.0 / max(dot(hu, hu), 1e-4));
+}
+
+void main() {
+    vec3 n = normalize(v_normal);
+    float facing = 1.0;
+    if (!gl_FrontFacing) {
+        n = -n;
+        facing = u_backface;
+    }
+    vec3 v = normalize(-v_pos);
+    vec3 direct = wrapped(n, u_key_dir, u_key_col) + wrapped(n, u_fill_dir, u_fill_col)
+                + wrapped(n, u_rim_dir, u_rim_col) + mix(u_ground, u_sky, 0.5 + 0.5 * n.y);
+    vec4 t = texture(u_irr, v_uv);
+    vec3 blurred = t.a > 1e-3 ? t.rgb / t.a : direct;
+    float cover = smoothstep(0.05, 0.6, t.a);
+    vec3 irr = mix(direct, blurred, u_mix * cover);
+    vec3 spec = specular(n, v, u_key_dir, u_key_col) + specular(n, v, u_fill_dir, u_fill_col)
+              + specular(n, v, u_rim_dir, u_rim_col);
+    vec3 c = (u_base * irr + spec) * facing;
+    f_color = vec4(to_srgb(tonemap(c)), 1.0);
+}

@@ -1,0 +1,22 @@
+#version 330
+// Skin pass (c): the skin seen by the camera, with its texture coordinates for the lookup of
+// the blurred irradiance.
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform vec4 u_uv_xform;
+
+in vec3 in_position;
+in vec3 in_normal;
+in vec2 in_uv;
+
+out vec3 v_pos;     // view space
+out vec3 v_normal;  // view space
+out vec2 v_uv;
+
+void main() {
+    vec4 p = u_view * vec4(in_position, 1.0);
+    v_pos = p.xyz;
+    v_normal = mat3(u_view) * in_normal;
+    v_uv = (in_uv - u_uv_xform.xy) * u_uv_xform.zw;
+    gl_Position = u_proj * p;
+}

@@ -1,0 +1,249 @@
+"""MP4 writing (H.264 video + AAC audio) through PyAV (FFmpeg), atomically.
+
+:class:`VideoWriter` encodes RGB frames (yuv420p, even sizes) at a fixed frame rate, muxes mono
+float audio as AAC, and writes to a temporary file beside the target that is renamed over it
+only when everything succeeded — an interrupted or failed render leaves nothing half-written.
+Encoding can run in a background thread (``threaded=True``) so that rendering and encoding
+overlap.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import queue
+import tempfile
+import threading
+import time
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mimika.errors import DataError, ParameterError, RenderError
+
+log = logging.getLogger(__name__)
+
+_STOP = object()
+
+
+def _import_av() -> Any:
+    try:
+        import av
+    except ImportError as exc:
+        raise RenderError(f"video output needs PyAV ({exc}); install it with: "
+                          "pip install 'mimika[video]'") from exc
+    return av
+
+
+class VideoWriter:
+    """Write an MP4 file frame by frame.
+
+    Parameters
+    ----------
+    path : target ``.mp4`` path (written atomically on :meth:`close`)
+    fps : frames per second (keyword-only), > 0
+    size : (width, height) in pixels; both must be even (yuv420p)
+    audio : optional mono audio, shape (n_samples,), float32 in [-1, 1]
+    sr : sample rate of ``audio`` in Hz (keyword-only, required with audio)
+    crf, preset : libx264 quality (0–51, lower is better) and speed preset
+    threaded : encode in a background thread
+
+    Use as a context manager: leaving the block normally finishes the file; an exception
+    discards it.
+    """
+
+    def __init__(self, path: str | os.PathLike, *, fps: float, size: tuple[int, int],
+                 audio: np.ndarray | None = None, sr: int | None = None, crf: int = 23,
+                 preset: str = "veryfast", threaded: bool = True) -> None:
+        av = _import_av()
+        w, h = (int(s) for s in size)
+        if w % 2 or h % 2 or w < 2 or h < 2:
+            raise ParameterError(f"size={w}x{h}: H.264 (yuv420p) needs even width and height")
+        if not (fps > 0):
+            raise ParameterError(f"fps={fps!r} must be > 0")
+        if not 0 <= int(crf) <= 51:
+            raise ParameterError(f"crf={crf!r} must be in 0..51")
+        if audio is not None and not sr:
+            raise ParameterError("audio needs its sample rate sr")
+        self.path = Path(path)
+        self.size = (w, h)
+        self.fps = Fraction(fps).limit_denominator(1001)
+        self.n_frames = 0
+        #: seconds spent encoding (in the worker thread when threaded)
+        self.encode_seconds = 0.0
+        parent = self.path.parent if str(self.path.parent) else Path(".")
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".mp4", dir=parent)
+            os.close(fd)
+        except OSError as e:
+            raise DataError(f"cannot write {str(self.path)!r}: {e.strerror or e}") from None
+        self._tmp = Path(tmp)
+        try:
+            self._c = av.open(str(self._tmp), mode="w", format="mp4")
+            vs = self._c.add_stream("libx264", rate=self.fps)
+            vs.width, vs.height = w, h
+            vs.pix_fmt = "yuv420p"
+            vs.options = {"crf": str(int(crf)), "preset": preset}
+            vs.codec_context.time_base = Fraction(1, 1) / self.fps
+            self._vs = vs
+            self._as = None
+            self._audio = None
+            if audio is not None:
+                a = np.ascontiguousarray(audio, np.float32).reshape(-1)
+                st = self._c.add_stream("aac", rate=int(sr))
+                st.layout = "mono"
+                st.codec_context.time_base = Fraction(1, int(sr))
+                self._as, self._audio, self._sr, self._apos = st, a, int(sr), 0
+        except Exception:
+            self._discard()
+            raise
+        self._err: BaseException | None = None
+        self._q: queue.Queue | None = None
+        self._thread: threading.Thread | None = None
+        if threaded:
+            self._q = queue.Queue(maxsize=8)
+            self._thread = threading.Thread(target=self._worker, name="mimika-video",
+                                            daemon=True)
+            self._thread.start()
+
+    # ---------------------------------------------------------------- encoding
+    def _encode_audio_until(self, t: float | None) -> None:
+        if self._as is None:
+            return
+        av = _import_av()
+        end = len(self._audio) if t is None else min(len(self._audio), int(t * self._sr))
+        step = self._as.codec_context.frame_size or 1024
+        while self._apos < end and (t is None or end - self._apos >= step):
+            chunk = self._audio[self._apos: self._apos + step]
+            fr = av.AudioFrame.from_ndarray(chunk[None, :], format="fltp", layout="mono")
+            fr.sample_rate = self._sr
+            fr.pts = self._apos
+            fr.time_base = Fraction(1, self._sr)
+            self._apos += len(chunk)
+            for pkt in self._as.encode(fr):
+                self._c.mux(pkt)
+
+    def _encode(self, rgb: np.ndarray, index: int) -> None:
+        av = _import_av()
+        t0 = time.perf_counter()
+        fr = av.VideoFrame.from_ndarray(rgb, format="rgb24")
+        fr.pts = index
+        fr.time_base = Fraction(1, 1) / self.fps
+        for pkt in self._vs.encode(fr):
+            self._c.mux(pkt)
+        self._encode_audio_until((index + 1) / float(self.fps))
+        self.encode_seconds += time.perf_counter() - t0
+
+    def _worker(self) -> None:
+        assert self._q is not None
+        while True:
+            item = self._q.get()
+            if item is _STOP:
+                return
+            if self._err is not None:
+                continue
+            try:
+                self._encode(*item)
+            except BaseException as e:  # reported on the next write / close
+                self._err = e
+
+    def write(self, frame: np.ndarray) -> None:
+        """Append one frame, shape (height, width, 3) uint8 RGB, top row first."""
+        a = np.asarray(frame)
+        if a.shape != (self.size[1], self.size[0], 3) or a.dtype != np.uint8:
+            raise ParameterError(f"frame has shape {a.shape} {a.dtype}, expected "
+                                 f"({self.size[1]}, {self.size[0]}, 3) uint8")
+        if self._err is not None:
+            raise RenderError(f"video encoding failed: {self._err}") from self._err
+        if self._q is not None:
+            self._q.put((np.ascontiguousarray(a), self.n_frames))
+        else:
+            self._encode(a, self.n_frames)
+        self.n_frames += 1
+
+    def _join(self) -> None:
+        if self._thread is not None and self._thread.is_alive():
+            assert self._q is not None
+            self._q.put(_STOP)
+            self._thread.join()
+
+    def close(self) -> Path:
+        """Flush the encoders, finish the file and move it to :attr:`path`; returns it."""
+        try:
+            self._join()
+            if self._err is not None:
+                raise RenderError(f"video encoding failed: {self._err}") from self._err
+            for pkt in self._vs.encode(None):
+                self._c.mux(pkt)
+            if self._as is not None:
+                self._encode_audio_until(None)
+                for pkt in self._as.encode(None):
+                    self._c.mux(pkt)
+            self._c.close()
+            with open(self._tmp, "rb+") as f:
+                os.fsync(f.fileno())
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(self._tmp, 0o666 & ~umask)  # like a plain open(); mkstemp makes it 0600
+            os.replace(self._tmp, self.path)
+        except OSError as e:
+            self._discard()
+            raise DataError(f"cannot write {str(self.path)!r}: {e.strerror or e}") from None
+        except BaseException:
+            self._discard()
+            raise
+        log.info("wrote %s: %d frames at %s fps", self.path, self.n_frames, self.fps)
+        return self.path
+
+    def abort(self) -> None:
+        """Stop and delete the temporary file; the target is left untouched."""
+        self._join()
+        self._discard()
+
+    def _discard(self) -> None:
+        with contextlib.suppress(Exception):
+            self._c.close()
+        with contextlib.suppress(OSError):
+            self._tmp.unlink()
+
+    def __enter__(self) -> VideoWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+def probe(path: str | os.PathLike) -> dict[str, Any]:
+    """Codec names, frame count and durations (s) of a video file, by decoding it with PyAV.
+
+    Returns ``{"video_codec", "audio_codec", "width", "height", "fps", "n_frames",
+    "video_duration", "audio_duration"}`` (audio entries None without audio).
+    """
+    av = _import_av()
+    with av.open(str(path)) as c:
+        vs = c.streams.video[0]
+        ast = c.streams.audio[0] if c.streams.audio else None
+        n = 0
+        last_v = 0.0
+        a_end = 0.0
+        for frame in c.decode(*( [vs] + ([ast] if ast is not None else []))):
+            if isinstance(frame, av.VideoFrame):
+                n += 1
+                last_v = float(frame.time)
+            else:
+                a_end = max(a_end, float(frame.time) + frame.samples / frame.sample_rate)
+        fps = float(vs.average_rate or vs.base_rate)
+        return {
+            "video_codec": vs.codec_context.name,
+            "audio_codec": ast.codec_context.name if ast is not None else None,
+            "width": vs.width, "height": vs.height, "fps": fps, "n_frames": n,
+            "video_duration": last_v + 1.0 / fps if n else 0.0,
+            "audio_duration": a_end if ast is not None else None,
+        }
