@@ -57,6 +57,7 @@ class Material:
     wrap: float = 0.0
     scatter: tuple[float, float, float] = (1.0, 1.0, 1.0)
     alpha: float = 1.0
+    cull: bool = False  #: skip back faces (closed, outward-facing surfaces only)
 
 
 @functools.cache
@@ -73,6 +74,7 @@ def load_materials() -> dict[str, Material]:
             specular=float(m.get("specular", 0.2)),
             shininess=float(m.get("shininess", 20.0)),
             wrap=float(m.get("wrap", 0.0)),
+            cull=bool(m.get("cull", False)),
             scatter=srgb_to_linear(m.get("scatter", "#ffffff")),
             alpha=float(m.get("alpha", 1.0)),
         )
@@ -293,10 +295,15 @@ class Renderer:
                         glass.append((o, mat, first, count))
                         continue
                     self._set_material(prog, mat)
+                    if mat.cull:
+                        ctx.enable(ctx.CULL_FACE)
+                    else:
+                        ctx.disable(ctx.CULL_FACE)
                     if skin is not None and skin.handles(o, first):
                         skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE)
                         continue
                     o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+            ctx.disable(ctx.CULL_FACE)
             if glass:
                 ctx.enable(ctx.BLEND)
                 ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA

@@ -1,0 +1,151 @@
+"""The worker side of a batch: render items to encoded PNG (and clip) bytes.
+
+Runs inside Dask worker processes (or in-process). Each process keeps its heads, rigs and
+renderers in a small module-level cache keyed by (head, identity, size, samples), so a head is
+loaded and its GL objects created once per worker, not once per task. Nothing here imports
+Dask.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+import os
+import socket
+import tempfile
+import time
+from collections import OrderedDict
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+_CACHE: OrderedDict[tuple, tuple[Any, Any]] = OrderedDict()
+_CACHE_SIZE = 4
+
+
+def _rig_and_renderer(head: str, identity: Any, size: Sequence[int], samples: int):
+    """(rig, renderer) for one head/identity/size, loaded once per process (LRU of 4)."""
+    ident = tuple(identity) if isinstance(identity, list | tuple) else identity
+    key = (head, ident, tuple(size), int(samples))
+    hit = _CACHE.get(key)
+    if hit is not None:
+        _CACHE.move_to_end(key)
+        return hit
+    from mimika.face.heads import load_head
+    from mimika.render import Renderer
+
+    kw = {} if ident is None else {"identity": list(ident) if isinstance(ident, tuple) else ident}
+    t0 = time.perf_counter()
+    _, rig = load_head(head, **kw)
+    renderer = Renderer(rig.head, size=(int(size[0]), int(size[1])), samples=int(samples))
+    _CACHE[key] = (rig, renderer)
+    log.info("worker %d: loaded head %s (identity %s) in %.2f s", os.getpid(), head, ident,
+             time.perf_counter() - t0)
+    while len(_CACHE) > _CACHE_SIZE:
+        _, (_, old) = _CACHE.popitem(last=False)
+        old.close()
+    return rig, renderer
+
+
+def clear_cache() -> None:
+    """Free every cached renderer of this process."""
+    while _CACHE:
+        _, (_, r) = _CACHE.popitem()
+        r.close()
+
+
+#: zlib level of batch PNGs: 3 encodes a 320×240 face ~2.5× faster than Pillow's default 6
+#: for ~12 % larger files (encoding was a third of the time per image)
+PNG_COMPRESS_LEVEL = 3
+
+
+def _png_bytes(img: np.ndarray) -> bytes:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(img).save(buf, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
+    return buf.getvalue()
+
+
+def _clip_frames(rig: Any, renderer: Any, item: Mapping[str, Any],
+                 settings: Mapping[str, Any]) -> list[np.ndarray]:
+    """Onset–apex–offset frames of ``item``'s requested AUs (blended per frame)."""
+    from mimika.timeline import Event, sample, timeline_from_events
+
+    a = settings["animation"]
+    dur = a["onset"] + a["apex"] + a["offset"]
+    ev = Event(kind="aus", start=0.0, duration=dur, aus=tuple(item["requested"].items()),
+               onset=a["onset"], offset=a["offset"], ease=a.get("ease"))
+    track = sample(timeline_from_events([ev]), fps=a["fps"], blend=bool(settings["blend"]),
+                   disabled=settings["disabled_rules"], duration=dur)
+    return [renderer.render(rig.deform(track.frame(i)), view=item["view"])
+            for i in range(track.n_frames)]
+
+
+def _encode_clip(frames: list[np.ndarray], fmt: str, fps: float) -> bytes:
+    if fmt == "strip":
+        return _png_bytes(np.concatenate(frames, axis=1))
+    if fmt == "gif":
+        from PIL import Image
+
+        ims = [Image.fromarray(f) for f in frames]
+        buf = io.BytesIO()
+        ims[0].save(buf, format="GIF", save_all=True, append_images=ims[1:],
+                    duration=round(1000 / fps), loop=0)
+        return buf.getvalue()
+    from mimika.render.video import VideoWriter
+
+    h, w = frames[0].shape[:2]
+    with tempfile.TemporaryDirectory(prefix="mimika-batch-") as d:
+        path = Path(d) / "clip.mp4"
+        with VideoWriter(path, fps=fps, size=(w, h), threaded=False) as vw:
+            for f in frames:
+                vw.write(f)
+        return path.read_bytes()
+
+
+def render_items(items: Sequence[Mapping[str, Any]], settings: Mapping[str, Any]
+                 ) -> list[dict[str, Any]]:
+    """Render ``items`` (:meth:`Item.payload` dicts); one result dict per item.
+
+    A result holds ``id``, ``ok``, ``png`` (bytes), ``clip`` (bytes or None), ``seconds``,
+    ``worker`` and, on failure, ``error``. Errors are caught per item so one bad item does not
+    lose the others of its task.
+    """
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    out: list[dict[str, Any]] = []
+    last: tuple[Any, Any] | None = None  # (aus key, positions): consecutive views share a pose
+    for item in items:
+        t0 = time.perf_counter()
+        res: dict[str, Any] = {"id": item["id"], "ok": False, "png": None, "clip": None,
+                               "worker": worker}
+        try:
+            rig, renderer = _rig_and_renderer(item["head"], item["identity"],
+                                              settings["size"], settings["samples"])
+            pose_key = (id(rig), tuple(sorted(item["aus"].items())))
+            if last is None or last[0] != pose_key:
+                last = (pose_key, rig.deform(rig.check(item["aus"])))
+            res["png"] = _png_bytes(renderer.render(last[1], view=item["view"]))
+            if item.get("clip") and settings.get("animation"):
+                frames = _clip_frames(rig, renderer, item, settings)
+                res["clip"] = _encode_clip(frames, settings["clip_format"],
+                                           settings["animation"]["fps"])
+            res["ok"] = True
+        except Exception as e:  # reported in the manifest; the run goes on
+            log.warning("item %s failed: %s", item["id"], e)
+            res["error"] = f"{type(e).__name__}: {e}"
+        res["seconds"] = round(time.perf_counter() - t0, 4)
+        out.append(res)
+    return out
+
+
+def warm(head: str, identity: Any, size: Sequence[int], samples: int) -> str:
+    """Load ``head`` and draw one frame in this process (benchmarks call it on every worker
+    through ``client.run`` so that timings exclude start-up)."""
+    rig, renderer = _rig_and_renderer(head, identity, size, samples)
+    renderer.render(rig.deform({}), view="front")
+    return f"{socket.gethostname()}:{os.getpid()}"
