@@ -1,4 +1,7 @@
 """CLI commands, one module each; every module has ``register(subparsers)``."""
 
 #: command modules in the order ``mimika --help`` lists them
-MODULES = ("catalogue", "pose", "knowledge", "speech", "timeline", "learn", "gan", "studio", "news", "batch")
+MODULES = (
+    "catalogue", "pose", "knowledge", "speech", "timeline", "fit", "learn", "gan", "studio",
+    "news", "batch",
+)

@@ -29,7 +29,18 @@ def cmd_pose(args: argparse.Namespace) -> int:
         raise ParameterError("--intensity scales an --expression; give one with it")
     for code, value in parse_au_values(args.au or []).items():
         aus[code] = value  # explicit AUs override the expression's
-    _, rig = load_head(args.head, fields=args.fields)
+    identity = None
+    if args.identity is not None and args.identity_weights:
+        raise ParameterError("give --identity or --identity-weights, not both")
+    if args.identity_weights:
+        try:
+            identity = [float(x) for x in args.identity_weights.split(",")]
+        except ValueError:
+            raise ParameterError(f"--identity-weights {args.identity_weights!r} must be "
+                                 "comma-separated numbers") from None
+    elif args.identity is not None:
+        identity = args.identity
+    _, rig = load_head(args.head, fields=args.fields, identity=identity)
     if args.grid:
         img = au_sheet(head=rig, view=args.view, columns=args.columns,
                        progress=progress_bar(args.quiet, "rendering AUs"))
@@ -52,6 +63,10 @@ def register(sub) -> None:
     q.add_argument("--head", default="builtin",
                    help="builtin (default), ict, an ICT-FaceKit folder or an .obj face mesh")
     q.add_argument("--fields", help="AU field parameters (JSON) for a FieldRig head")
+    q.add_argument("--identity", type=int, metavar="K",
+                   help="ICT head only: identity mode K (0–9) of the ICT model")
+    q.add_argument("--identity-weights", metavar="W,…",
+                   help="ICT head only: identity mode weights, e.g. 0.5,-1,0 (up to 10)")
     q.add_argument("--view", default="front", choices=VIEWS)
     q.add_argument("--size", type=size_arg, default=(640, 480), help="WIDTHxHEIGHT (640x480)")
     q.add_argument("--samples", type=int, default=4, choices=(0, 2, 4, 8),

@@ -44,21 +44,48 @@ import numpy as np
 from scipy.optimize import minimize
 
 from mimika.errors import DataError, ParameterError
-from mimika.face.field import Cubic, FieldRig, Gaussian, LinearField, Rbf, parse_fields
+from mimika.face.field import (
+    Cubic,
+    FieldRig,
+    Gaussian,
+    LinearField,
+    Rbf,
+    Split,
+    parse_fields,
+)
 from mimika.face.head import Head
 from mimika.facs import AU_CATALOGUE, parse_au
 
 log = logging.getLogger(__name__)
 
 __all__ = [
-    "FAMILIES", "SUB_OBJECT", "AuAccuracy", "FitOptions", "FitResult", "fit_field",
-    "fit_ict", "fit_phi", "fit_psi", "mouth_split", "report_csv", "report_markdown",
-    "similarity_transform", "transfer_fields",
+    "FAMILIES",
+    "SUB_OBJECT",
+    "AuAccuracy",
+    "FitOptions",
+    "FitResult",
+    "eye_split",
+    "fit_field",
+    "fit_ict",
+    "fit_phi",
+    "fit_psi",
+    "landmark_agreement",
+    "load_fitted_rig",
+    "mouth_split",
+    "refine_mouth_split",
+    "report_csv",
+    "report_markdown",
+    "similarity_transform",
+    "transfer_fields",
 ]
 
 FAMILIES = ("seed", "rich")
 #: seed §4.3.2: AUs whose mesh is split by the surface through the mouth corners
 SUB_OBJECT = ("AU10", "AU16", "AU18", "AU22", "AU25", "AU27", "AU28")
+#: lid AUs split by the eye fissure in the rich family (upper and lower lid move apart)
+LID_AUS = ("AU05", "AU07", "AU41", "AU42", "AU43", "AU44", "AU45", "AU46")
+#: jaw AUs also split by the mouth in the rich family (the ICT jaw shapes part the lips)
+JAW_AUS = ("AU26", "AU29", "AU30")
 #: the ICT "face" vertex range (README: face 0–9408) inside the ``skin`` object
 FACE_RANGE = (0, 9409)
 Progress = Callable[[int, int], None]
@@ -78,6 +105,9 @@ class FitOptions:
     sigma_min_cm : lower bound of every Gaussian's standard deviation, in every direction
         (Σ = σ_min²·I + LLᵀ), so φ does not collapse across the surface it was fitted on.
     rbf_centers, rbf_ridge : the ``rich`` family's residual: centres per field, ridge weight.
+    lid_split : lid AUs (:data:`LID_AUS`) become sub-object AUs split by the eye fissure
+        (:func:`eye_split`) and jaw AUs (:data:`JAW_AUS`) split by the mouth; default: on for
+        ``rich``, off for ``seed`` (the seed splits the mouth for its seven AUs only).
     """
 
     family: str = "seed"
@@ -90,12 +120,15 @@ class FitOptions:
     psi_evals: int = 6000
     phi_evals: int = 3000
     sigma_min_cm: float = 0.4
-    rbf_centers: int = 160
+    rbf_centers: int = 240
     rbf_ridge: float = 1e-4
+    lid_split: bool | None = None
 
     def __post_init__(self) -> None:
         if self.family not in FAMILIES:
             raise ParameterError(f"family {self.family!r} must be one of {', '.join(FAMILIES)}")
+        if self.lid_split is None:
+            object.__setattr__(self, "lid_split", self.family == "rich")
         if not 0.0 <= self.holdout < 1.0:
             raise ParameterError(f"holdout={self.holdout} must be in [0, 1)")
 
@@ -178,9 +211,9 @@ def fit_psi(u: np.ndarray, d: np.ndarray, *, max_evals: int = 6000) -> tuple[Cub
     w_a = w_b * np.cos(beta_t) ** 2 + 1e-9
 
     def lsq(target: np.ndarray, w: np.ndarray, a2: np.ndarray) -> np.ndarray:
-        lin = u_feats = np.c_[q, uu, np.ones(len(uu))]
+        lin = np.c_[q, uu, np.ones(len(uu))]
         if np.any(a2):
-            lin = np.c_[q * (uu @ a2)[:, None], u_feats]
+            lin = np.c_[q * (uu @ a2)[:, None], lin]
         sw = np.sqrt(w)[:, None]
         a = lin * sw
         reg = 1e-6 * np.trace(a.T @ a) / a.shape[1]
@@ -257,8 +290,16 @@ def fit_phi(u: np.ndarray, mag: np.ndarray, *, groups: Sequence[np.ndarray] | No
         theta0.append(np.r_[np.log(max(np.quantile(w, 0.95), 1e-9)), m, lower[_TRIL]])
     x0 = np.concatenate(theta0)
 
+    # keep every mean within 2× the data's radius of its centroid: a near-constant density
+    # could otherwise drift far away with a vanishing B (numerically fragile, lost in files)
+    centre = u.mean(0)
+    radius = 2.0 * float(np.linalg.norm(u - centre, axis=1).max()) + 1e-9
+    weight = float((mag**2).sum())
+
     def err(t: np.ndarray) -> float:
-        return float(((mag - _phi_eval(t, u, s2min)) ** 2).sum())
+        far = np.linalg.norm(t.reshape(-1, 10)[:, 1:4] - centre, axis=1) / radius - 1.0
+        return float(((mag - _phi_eval(t, u, s2min)) ** 2).sum()
+                     + weight * (np.maximum(far, 0.0) ** 2).sum())
 
     scale = np.sqrt(np.diag(np.cov(u.T))).mean() if len(u) > 3 else 1.0
     step = np.tile(np.r_[0.2, np.full(3, 0.1 * scale), np.full(6, 0.1 * scale)], len(groups))
@@ -353,29 +394,114 @@ def similarity_transform(src: np.ndarray, dst: np.ndarray) -> tuple[float, np.nd
     return s, r, md - s * r @ ms
 
 
-def mouth_split(landmarks: np.ndarray) -> dict:
+def _lip_line(lm: np.ndarray) -> tuple[float, np.ndarray]:
+    """Mouth midline x and the inner-lip line (4, 3): centre, two mid points, corner, as
+    (|x − mid|, y, z), mirrored and averaged from landmarks 60–67."""
+    mid_x = 0.5 * (lm[64, 0] + lm[60, 0])
+    pts = []
+    for ids in ((62, 66), (61, 67, 63, 65), (60, 64)):
+        q = lm[list(ids)]
+        pts.append((0.0 if ids[0] == 62 else float(np.mean(np.abs(q[:, 0] - mid_x))),
+                    float(q[:, 1].mean()), float(q[:, 2].mean())))
+    return float(mid_x), np.asarray(pts)
+
+
+def mouth_split(landmarks: np.ndarray, normal: Sequence[float] = (0.0, 1.0, 0.0),
+                offsets: np.ndarray | None = None) -> dict:
     """The mouth split surface (fields-file JSON) from the 68 landmarks (cm, head frame).
 
-    A surface y = profile(|x|) through the middle of the inner lip contour (landmarks 60–67:
-    corners 60/64, upper 61–63, lower 65–67), constant beyond the corners, with a soft band
-    outside the corners (as the built-in file does) so the skin stays continuous there.
+    A surface through the middle of the inner lip contour (landmarks 60–67: corners 60/64,
+    upper 61–63, lower 65–67): s = (v − p)·n − profile(|x|), with the profile through the lip
+    line and constant beyond the corners, and a soft band outside the corners (as the built-in
+    file does) so the skin stays continuous there. ``normal`` tilts the surface (the seed's
+    plane through the corners may tilt); ``offsets`` (M, 2): extra offsets along the normal
+    (cm) at |x| given as fractions of the mouth half-width (from :func:`refine_mouth_split`).
     """
     lm = np.asarray(landmarks, float)
-    cx = 0.5 * (lm[64, 0] - lm[60, 0])
-    mid_x = 0.5 * (lm[64, 0] + lm[60, 0])
-    pairs = [(62, 66, 62, 66), (61, 67, 63, 65)]
-    prof = []
-    for a, b, c, e in pairs:
-        x = 0.25 * (abs(lm[a, 0] - mid_x) + abs(lm[b, 0] - mid_x) + abs(lm[c, 0] - mid_x)
-                    + abs(lm[e, 0] - mid_x))
-        y = 0.25 * (lm[a, 1] + lm[b, 1] + lm[c, 1] + lm[e, 1])
-        prof.append((x if a != 62 else 0.0, y))
-    prof.append((cx, 0.5 * (lm[60, 1] + lm[64, 1])))
-    prof.append((30.0, prof[-1][1]))
-    prof_arr = np.asarray(sorted(prof))
-    return {"point": [round(float(mid_x), 6), 0.0, 0.0], "normal": [0.0, 1.0, 0.0],
-            "profile": np.round(prof_arr, 6).tolist(),
-            "soft": [0.0, round(float(cx), 6), 1.0]}
+    mid_x, line = _lip_line(lm)
+    n = np.asarray(normal, float) / np.linalg.norm(normal)
+    z0 = float(line[0, 2])
+    p = np.array([mid_x, 0.0, z0])
+    cx = float(line[-1, 0])
+    base = np.c_[line[:, 0], (np.c_[np.zeros(len(line)), line[:, 1:]] - [0, 0, z0]) @ n]
+    if offsets is not None and len(offsets):
+        xs = np.asarray(offsets, float)[:, 0] * cx
+        prof = np.c_[xs, np.interp(xs, base[:, 0], base[:, 1]) + np.asarray(offsets)[:, 1]]
+    else:
+        prof = base
+    prof = np.r_[prof[prof[:, 0] < cx], [[cx, np.interp(cx, prof[:, 0], prof[:, 1])]],
+                 [[30.0, np.interp(cx, prof[:, 0], prof[:, 1])]]]
+    return {"point": np.round(p, 6).tolist(), "normal": np.round(n, 8).tolist(),
+            "profile": np.round(prof, 6).tolist(), "soft": [0.0, round(cx, 6), 1.0]}
+
+
+def refine_mouth_split(landmarks: np.ndarray, rest: np.ndarray, jaw: np.ndarray,
+                       bins: int = 24) -> tuple[np.ndarray, np.ndarray, float]:
+    """Tilt and offsets of the mouth split that best separate the lips as a jaw opening
+    moves them: ``rest`` (N, 3) face vertices, ``jaw`` (N, 3) their displacement at a full jaw
+    drop. Lip vertices near the landmark lip line are labelled lower (they drop ≥ half the
+    largest drop there) or upper (≤ a quarter); over tilts of ±60°, the offsets are the
+    midpoints of the gap between the classes per |x| bin, and the tilt with the widest
+    smallest gap wins. Returns (normal (3,), offsets (M, 2), margin in cm)."""
+    lm = np.asarray(landmarks, float)
+    mid_x, line = _lip_line(lm)
+    cx = float(line[-1, 0])
+    ax = np.abs(rest[:, 0] - mid_x)
+    y_l = np.interp(ax, line[:, 0], line[:, 1])
+    z_l = np.interp(ax, line[:, 0], line[:, 2])
+    near = (ax < cx) & (np.abs(rest[:, 1] - y_l) < 0.5) & (rest[:, 2] > z_l - 1.0)
+    drop = float(jaw[near, 1].min()) if near.any() else 0.0
+    if drop > -0.1:
+        return np.array([0.0, 1.0, 0.0]), np.zeros((0, 2)), 0.0
+    lower, upper = near & (jaw[:, 1] <= 0.5 * drop), near & (jaw[:, 1] >= 0.25 * drop)
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    b = np.clip(np.searchsorted(edges, ax / cx, side="right") - 1, 0, bins - 1)
+    best = (np.inf, -np.inf, np.array([0.0, 1.0, 0.0]), np.zeros((0, 2)))
+    for deg in range(-60, 61, 3):
+        t = np.radians(deg)
+        n = np.array([0.0, np.cos(t), -np.sin(t)])
+        split = Split.from_json(mouth_split(lm, n))
+        sv = (rest - split.point) @ split.normal - np.interp(ax, *split.profile.T)
+        offs, gaps = [], []
+        for k in range(bins):
+            lo_k, up_k = lower & (b == k), upper & (b == k)
+            if lo_k.any() and up_k.any():
+                a_k, b_k = sv[lo_k].max(), sv[up_k].min()
+                gap = b_k - a_k
+                gaps.append(gap)
+                # stay as close to the landmark line as the gap allows (smooth profile)
+                off = np.clip(0.0, a_k + 0.2 * gap, b_k - 0.2 * gap) if gap > 0 \
+                    else 0.5 * (a_k + b_k)
+                offs.append((0.5 * (edges[k] + edges[k + 1]), float(off)))
+        if not gaps:
+            continue
+        final = Split.from_json(mouth_split(lm, n, np.asarray(offs)))
+        w = final.upper_weight(rest)
+        wrong = int((lower & (w > 0.5)).sum() + (upper & (w < 0.5)).sum())
+        if (wrong, -min(gaps)) < (best[0], -best[1]):
+            best = (wrong, float(min(gaps)), n, np.asarray(offs))
+    wrong, margin, n, offs = best
+    log.info("mouth split: tilt %.0f°, %d of %d lip vertices on the wrong side, smallest gap "
+             "%.2f mm", np.degrees(np.arctan2(-n[2], n[1])), wrong, int((lower | upper).sum()),
+             10 * margin)
+    return n, offs, margin
+
+
+def eye_split(landmarks: np.ndarray) -> dict:
+    """The eye-fissure split surface (fields-file JSON) from the 68 landmarks: y =
+    profile(|x|) through the middle of both eye openings (36–41 and 42–47, mirrored and
+    averaged), constant beyond the corners, soft outside the openings."""
+    lm = np.asarray(landmarks, float)
+    mid_x = float(0.5 * (lm[39, 0] + lm[42, 0]))
+    pts = []
+    for ids in ((39, 42), (38, 40, 43, 47), (37, 41, 44, 46), (36, 45)):
+        pts.append((float(np.mean(np.abs(lm[list(ids), 0] - mid_x))),
+                    float(np.mean(lm[list(ids), 1]))))
+    x_in, x_out = pts[0][0], pts[-1][0]
+    prof = [(0.0, pts[0][1]), *pts, (30.0, pts[-1][1])]
+    return {"point": [round(mid_x, 6), 0.0, 0.0], "normal": [0.0, 1.0, 0.0],
+            "profile": np.round(np.asarray(prof), 6).tolist(),
+            "soft": [round(x_in, 6), round(x_out, 6), 1.0]}
 
 
 # --- the ICT fit --------------------------------------------------------------------------------
@@ -487,7 +613,10 @@ def fit_ict(path: str | None = None, aus: Sequence[str] | None = None,
     lm = head.landmark_points().astype(float)
     origin = lm.mean(0)
     scale = float(np.sqrt(((lm - origin) ** 2).sum(1).mean()))
-    split = mouth_split(lm)
+    jaw = rig.deform({"AU27": 1.0})["skin"][FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
+    face_v = head["skin"].vertices[FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
+    normal, offsets, _ = refine_mouth_split(lm, face_v, jaw - face_v)
+    split = mouth_split(lm, normal, offsets)
     doc: dict = {
         "format": "mimika-fields", "version": 1, "head": "ict",
         "description": f"Fitted to the ICT Face Model Light shapes by 'mimika fit' "
@@ -495,13 +624,24 @@ def fit_ict(path: str | None = None, aus: Sequence[str] | None = None,
         "frame": {"origin": np.round(origin, 6).tolist(), "scale": round(scale, 6)},
         "splits": {"mouth": split},
         "source": {"head": "ict", "landmarks": np.round(lm, 5).tolist(),
+                   "mouth_split": {"normal": np.round(normal, 8).tolist(),
+                                   "offsets": np.round(offsets, 6).tolist()},
                    "fit": {"family": opt.family, "seed": opt.seed}},
         "aus": {},
     }
+    if opt.lid_split:
+        doc["splits"]["eyes"] = eye_split(lm)
     probe = parse_fields({**doc, "aus": {}})
-    up_skin = probe.splits["mouth"].upper_weight(head["skin"].vertices)
-    skin = head["skin"].vertices.astype(float)
-    lo, hi = FACE_RANGE
+    # every face-category object is driven by the face field: fit on all of them (skin,
+    # mouth socket, eye sockets, lashes), measure on the ICT face range of the skin only
+    face_names = [o.name for o in head.objects if o.category == "face"]
+    rest = np.concatenate([head[n].vertices for n in face_names]).astype(float)
+    off = {n: int(o) for n, o in zip(face_names, np.cumsum(
+        [0] + [head[n].n_vertices for n in face_names]), strict=False)}
+    lo, hi = off["skin"] + FACE_RANGE[0], off["skin"] + FACE_RANGE[1]
+    in_face = np.zeros(len(rest), bool)
+    in_face[lo:hi] = True
+    upper = {name: sp.upper_weight(rest) for name, sp in probe.splits.items()}
     teeth_names = [o.name for o in head.objects if o.category == "teeth"]
     teeth_rest = np.concatenate([head[n].vertices for n in teeth_names]).astype(float)
     to_u = probe.to_u
@@ -517,23 +657,27 @@ def fit_ict(path: str | None = None, aus: Sequence[str] | None = None,
         spec = table["aus"][code]
         pose = {code + "L": 1.0, code + "R": 1.0} if AU_CATALOGUE[code].sided else {code: 1.0}
         pos = rig.deform(pose)
-        disp = pos["skin"].astype(float) - skin
-        measured[code] = disp
-        dv = disp[lo:hi]
-        mag = np.linalg.norm(dv, axis=1)
-        thr = max(opt.moving_min_cm, opt.moving_fraction * float(mag.max()))
-        mov = np.flatnonzero(mag >= thr) + lo
+        disp = np.concatenate([pos[n] for n in face_names]).astype(float) - rest
+        measured[code] = disp[off["skin"]:off["skin"] + head["skin"].n_vertices]
+        mag = np.linalg.norm(disp, axis=1)
+        thr = max(opt.moving_min_cm, opt.moving_fraction * float(mag[lo:hi].max()))
+        moves = mag >= thr
+        mov = np.flatnonzero(moves & in_face)
         perm = rng.permutation(mov)
         n_test = round(opt.holdout * len(perm))
-        heldout[code], train = np.sort(perm[:n_test]), np.sort(perm[n_test:])
+        heldout[code] = np.sort(perm[:n_test]) - off["skin"]
+        train = np.sort(np.r_[perm[n_test:], np.flatnonzero(moves & ~in_face)])
         # still vertices near the motion (target 0)
-        box_lo, box_hi = skin[mov].min(0) - 1.5, skin[mov].max(0) + 1.5
-        still = np.flatnonzero((mag < thr) & np.all((skin[lo:hi] >= box_lo) &
-                                                    (skin[lo:hi] <= box_hi), axis=1)) + lo
+        box_lo, box_hi = rest[mov].min(0) - 1.5, rest[mov].max(0) + 1.5
+        still = np.flatnonzero(~moves & np.all((rest >= box_lo) & (rest <= box_hi), axis=1))
         still = rng.permutation(still)[:opt.still_vertices]
         bilateral = _shape_is_sided(spec, shapes.names)
-        halves = (("upper", up_skin > 0.0), ("lower", up_skin < 1.0)) if code in SUB_OBJECT \
-            else ((None, np.ones(len(skin), bool)),)
+        split = "mouth" if code in SUB_OBJECT or (opt.lid_split and code in JAW_AUS) \
+            else "eyes" if (opt.lid_split and code in LID_AUS) else None
+        if split is None:
+            halves: tuple = ((None, np.ones(len(rest), bool)),)
+        else:
+            halves = (("upper", upper[split] > 0.0), ("lower", upper[split] < 1.0))
         face_spec: dict = {}
         for half, sel in halves:
             tr = train[sel[train]]
@@ -544,12 +688,14 @@ def fit_ict(path: str | None = None, aus: Sequence[str] | None = None,
                 continue
             idx = np.r_[tr, st]
             moving = np.r_[np.ones(len(tr), bool), np.zeros(len(st), bool)]
-            f = fit_field(to_u(skin[idx]), disp[idx] / scale, moving,
+            f = fit_field(to_u(rest[idx]), disp[idx] / scale, moving,
                           bilateral=bilateral, **fit_kw)
             if half is None:
                 face_spec = f.to_json()
             else:
                 face_spec[half] = f.to_json()
+        if split is not None and face_spec and split != "mouth":
+            face_spec["split"] = split
         objects = {"face": face_spec} if face_spec else {}
         # teeth: the lower teeth, gums and tongue follow the jaw (seed: AU26/27 move teeth)
         tpos = np.concatenate([pos[n] for n in teeth_names]).astype(float)
@@ -591,8 +737,11 @@ def _accuracy(doc: dict, head: Head, codes: Sequence[str], measured: Mapping[str
             if obj == "face":
                 model = rig.field_at(code, "skin", head["skin"].vertices)
             else:
-                model = np.concatenate([rig.field_at(code, n, head[n].vertices)
-                                        for n in teeth_names])
+                # the lower-teeth field itself, per vertex: the ICT head's teeth object holds
+                # both rows, so the FieldRig's whole-object side rule cannot be measured here
+                lower = rig.fields.linear[code]["teeth"].lower
+                v = np.concatenate([head[n].vertices for n in teeth_names])
+                model = rig.fields.to_head(lower(rig.fields.to_u(v)))
             ids = heldout[key]
             meas = measured[key][ids]
             dm = np.linalg.norm(meas, axis=1) * 10.0
@@ -683,7 +832,14 @@ def transfer_fields(doc: Mapping, target: Head, *,
              "scale": round(float(frame.get("scale", 1.0)) * s, 8),
              "rotation": np.round(r_old @ r.T, 10).tolist()}
     out["frame"] = frame
-    out["splits"] = {**out.get("splits", {}), "mouth": mouth_split(dst)}
+    ms = (doc.get("source") or {}).get("mouth_split") or {}
+    normal = r @ np.asarray(ms.get("normal", [0.0, 1.0, 0.0]), float)
+    offsets = np.asarray(ms.get("offsets", np.zeros((0, 2))), float).reshape(-1, 2)
+    offsets = offsets * [1.0, s]  # |x| fractions stay, offsets (cm) scale
+    splits = {**out.get("splits", {}), "mouth": mouth_split(dst, normal, offsets)}
+    if "eyes" in splits:
+        splits["eyes"] = eye_split(dst)
+    out["splits"] = splits
     out.pop("split", None)
     a = target.anchors
     for spec in out.get("aus", {}).values():
@@ -702,6 +858,8 @@ def transfer_fields(doc: Mapping, target: Head, *,
     src_info = dict(out.get("source", {}))
     out["source"] = {**src_info, "head": target.name, "landmarks": np.round(dst, 5).tolist(),
                      "transferred_from": src_info.get("head", "?"),
+                     "mouth_split": {"normal": np.round(normal, 8).tolist(),
+                                     "offsets": np.round(offsets, 6).tolist()},
                      "similarity": {"scale": s, "rotation": np.round(r, 8).tolist(),
                                     "translation": np.round(t, 6).tolist()}}
     out["head"] = target.name
