@@ -128,6 +128,16 @@ def _plt():
     return plt
 
 
+def _save(plt, fig, path: str | Path) -> Path:
+    """Lay out ``fig``, write it to ``path`` (folders created) and close it."""
+    fig.tight_layout()
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(p)
+    plt.close(fig)
+    return p
+
+
 def _smooth(w: np.ndarray, k: int) -> np.ndarray:
     if k <= 1 or len(w) < k:
         return w
@@ -163,12 +173,7 @@ def plot_w_curves(curves: dict[str, tuple[np.ndarray, np.ndarray]], path: str | 
         ax.axis("off")
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p)
-    plt.close(fig)
-    return p
+    return _save(plt, fig, path)
 
 
 def plot_sweep(sweeps: dict[str, dict[int, dict[str, Any]]], path: str | Path, *,
@@ -185,12 +190,7 @@ def plot_sweep(sweeps: dict[str, dict[int, dict[str, Any]]], path: str | Path, *
     ax.legend(fontsize=7)
     if title:
         ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p)
-    plt.close(fig)
-    return p
+    return _save(plt, fig, path)
 
 
 def plot_histograms(hists: dict[str, dict[str, float]], path: str | Path, *,
@@ -208,9 +208,4 @@ def plot_histograms(hists: dict[str, dict[str, float]], path: str | Path, *,
     ax.legend(fontsize=7, ncol=4)
     if title:
         ax.set_title(title, fontsize=9)
-    fig.tight_layout()
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p)
-    plt.close(fig)
-    return p
+    return _save(plt, fig, path)
