@@ -294,28 +294,37 @@ class RotationAU:
         )
 
     def weight(self, v: np.ndarray) -> np.ndarray:
-        """φ: the smoothed step from 1 (head) to 0 (neck base), shape (N,)."""
+        """φ: the smoothed step from 1 (head) to 0 (neck base), shape ``v.shape[:-1]``."""
         if self.falloff is None:
-            return np.ones(v.shape[0])
+            return np.ones(v.shape[:-1], v.dtype)
         top, bottom = self.falloff
-        t = np.clip((v[:, 1] - bottom) / (top - bottom), 0.0, 1.0)
+        t = np.clip((v[..., 1] - bottom) / (top - bottom), 0.0, 1.0)
         return t * t * (3 - 2 * t)
 
-    def apply(self, v: np.ndarray, tau: float, pivot: np.ndarray | None) -> np.ndarray:
-        """Move points ``v`` (N, 3) for intensity ``tau`` (may be negative for opposites)."""
-        w = self.weight(v) * tau
+    def apply(self, v: np.ndarray, tau: float | np.ndarray,
+              pivot: np.ndarray | None) -> np.ndarray:
+        """Move points ``v`` (N, 3) for intensity ``tau`` (may be negative for opposites);
+        or many frames at once: ``v`` (T, N, 3) with ``tau`` (T,)."""
+        tau = np.asarray(tau, v.dtype)
+        w = (self.weight(v) * (tau[:, None] if tau.ndim else tau)).astype(v.dtype)
         if self.vector is not None:
-            return v + w[:, None] * self.vector
+            return v + w[..., None] * self.vector
         p = pivot if isinstance(self.pivot, str) else self.pivot
         return rotate(v, self.axis, self.angle * w, p)
 
 
 def rotate(v: np.ndarray, axis: np.ndarray, angles: np.ndarray, pivot: np.ndarray) -> np.ndarray:
-    """Rotate points ``v`` (N, 3) about ``axis`` through ``pivot`` by per-point ``angles``."""
-    r = v - pivot
-    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
-    k = axis[None, :]
-    return pivot + r * c + np.cross(k, r) * s + k * (r @ axis)[:, None] * (1 - c)
+    """Rotate points ``v`` (..., 3) about ``axis`` through ``pivot`` by per-point ``angles``
+    (shape ``v.shape[:-1]``; Rodrigues' formula)."""
+    dt = v.dtype if v.dtype == np.float32 else np.float64
+    k = np.asarray(axis, dt)
+    p = np.asarray(pivot, dt)
+    r = v - p
+    ang = np.asarray(angles, dt)
+    c, s = np.cos(ang)[..., None], np.sin(ang)[..., None]
+    x, y, z = r[..., 0], r[..., 1], r[..., 2]
+    kxr = np.stack([k[1] * z - k[2] * y, k[2] * x - k[0] * z, k[0] * y - k[1] * x], axis=-1)
+    return p + r * c + kxr * s + k * (r @ k)[..., None] * (1 - c)
 
 
 # --- parameter files ---------------------------------------------------------------------------
@@ -666,12 +675,26 @@ class FieldRig(Rig):
                 pos += o.vertices.ravel()
             out[o.name] = pos.reshape(len(values), o.n_vertices, 3)
         succ = [j for j, c in enumerate(chans) if self.mixers[c[:4]] == "successive"]
-        for t in np.nonzero(np.any(values[:, succ] != 0, axis=1))[0] if succ else []:
-            frame = {chans[j]: float(values[t, j]) for j in succ if values[t, j] != 0}
-            pos = {name: out[name][t] for name in out}
-            self._successive(pos, split_sides(frame))
-            for name in out:
-                out[name][t] = pos[name]
+        if any(chans[j] in self.fields.linear for j in succ):  # rare: per frame
+            for t in np.nonzero(np.any(values[:, succ] != 0, axis=1))[0]:
+                frame = {chans[j]: float(values[t, j]) for j in succ if values[t, j] != 0}
+                pos = {name: out[name][t] for name in out}
+                self._successive(pos, split_sides(frame))
+                for name in out:
+                    out[name][t] = pos[name]
+            return out
+        col = {chans[j]: j for j in succ}
+        for code in self.order:  # rotations: each over all the frames where it is active
+            if code not in col:
+                continue
+            tau = values[:, col[code]]
+            active = np.nonzero(tau)[0]
+            if not len(active):
+                continue
+            rot, cats = self.fields.rotations[code]
+            for o in self.head.objects:
+                if o.category in cats:
+                    out[o.name][active] = rot.apply(out[o.name][active], tau[active], o.pivot)
         return out
 
     def _sided(self, d: np.ndarray, rest: np.ndarray, tl: float, tr: float) -> np.ndarray:

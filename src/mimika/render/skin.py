@@ -85,7 +85,7 @@ class SkinParams:
     Beckmann ``roughness``, a ``specular`` scale, the texture ``dtype`` and whether to blur
     only the texels of camera-facing skin (``cull``)."""
 
-    size: tuple[int, int] = (512, 256)
+    size: tuple[int, int] = (256, 128)
     passes: int = 4
     sigma_cm: tuple[float, ...] = (0.2, 0.2, 0.35, 0.35)
     mix: V3 = (0.8, 0.55, 0.4)
