@@ -25,7 +25,7 @@ from mimika.newsreader import example_bulletin, news_track, parse_article, speak
 from mimika.newsreader.pipeline import FILL
 from mimika.render import Renderer
 from mimika.render.camera import frame_head
-from mimika.render.skin import NEWS_LIGHTING
+from mimika.render.skin import NEWS_LIGHTING, SkinParams
 from mimika.render.video import VideoWriter
 
 
@@ -59,7 +59,8 @@ def bench_head(name: str, *, size: tuple[int, int], frames: int | None, skin: bo
     t_deform = clk.lap()
     cam = frame_head(rig.head, "front", aspect=size[0] / size[1], fill=FILL)
     imgs = []
-    with Renderer(rig.head, size=size, samples=0, skin_shader=skin,
+    skin_params = SkinParams(refresh=2) if skin else False  # as the newsreader renders video
+    with Renderer(rig.head, size=size, samples=0, skin_shader=skin_params,
                   lighting=NEWS_LIGHTING) as r:
         r.render({k: v[0] for k, v in pos.items()}, camera=cam)  # warm-up (compiles shaders)
         clk.lap()

@@ -187,12 +187,14 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
     """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head."""
     from mimika.render import Renderer
     from mimika.render.camera import frame_head
-    from mimika.render.skin import NEWS_LIGHTING
+    from mimika.render.skin import NEWS_LIGHTING, SkinParams
 
     tm = timings if timings is not None else {}
     w, h = size
     cam = frame_head(rig.head, view, aspect=w / h, fill=FILL)
-    with Renderer(rig.head, size=size, samples=samples, skin_shader=skin_shader,
+    # video: the blurred skin irradiance is refreshed every second frame (see SkinParams)
+    skin = SkinParams(refresh=2) if skin_shader else False
+    with Renderer(rig.head, size=size, samples=samples, skin_shader=skin,
                   lighting=NEWS_LIGHTING) as r:
         for i0 in range(0, track.n_frames, chunk):
             t0 = time.perf_counter()

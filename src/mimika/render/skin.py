@@ -83,7 +83,9 @@ class SkinParams:
     (1-D passes of 8 taps, alternating along u and v, ping-pong), Gaussian σ per pass in cm
     (the passes add up: total σ = √Σσ²), per-channel share of the blurred light ``mix`` (RGB),
     Beckmann ``roughness``, a ``specular`` scale, the texture ``dtype`` and whether to blur
-    only the texels of camera-facing skin (``cull``)."""
+    only the texels of camera-facing skin (``cull``). ``refresh`` > 1 reuses the blurred
+    irradiance for that many frames (temporal amortisation for video: at 25 fps the diffuse
+    light of slowly moving skin changes too little between two frames to see)."""
 
     size: tuple[int, int] = (256, 128)
     passes: int = 4
@@ -93,6 +95,7 @@ class SkinParams:
     specular: float = 8.0
     dtype: str = "f2"
     cull: bool = True
+    refresh: int = 1  #: recompute the blurred irradiance every ``refresh`` frames (video: 2)
 
 
 def unit(v: V3) -> V3:
@@ -226,6 +229,7 @@ class SkinShader:
         self.final["u_mix"].value = p.mix
         self.final["u_roughness"].value = p.roughness
         self.result = self.tex[0]
+        self._frame = -1
         log.debug("skin shader: %d object(s), %dx%d texels, %d passes", len(self.objects), w, h,
                   p.passes)
 
@@ -240,8 +244,11 @@ class SkinShader:
         p = self.params
         w, h = p.size
         vm = view_matrix.T.astype("f4").tobytes()
-        self.irr["u_view"].write(vm)
         self.final["u_view"].write(vm)
+        self._frame += 1
+        if p.refresh > 1 and self._frame % p.refresh:
+            return  # reuse the blurred irradiance of the previous frame
+        self.irr["u_view"].write(vm)
         ctx.disable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
         self.fbo_irr.use()
         ctx.viewport = (0, 0, w, h)
