@@ -231,17 +231,15 @@ def save_checkpoint(ckpt: dict, path: str | os.PathLike, *, half: bool = False) 
     """Write a checkpoint atomically; ``half`` stores float16 weights (half the size)."""
     import torch
 
-    from mimika.io.atomic import atomic_write  # noqa: F401  (same folder, same semantics)
+    from mimika.io.atomic import atomic_open
 
     c = dict(ckpt)
     if half:
         c["state_dict"] = {k: v.half() if v.is_floating_point() else v
                            for k, v in c["state_dict"].items()}
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{p.name}.tmp")
-    torch.save(c, tmp)
-    os.replace(tmp, p)
+    with atomic_open(p) as f:
+        torch.save(c, f)
     return p
 
 

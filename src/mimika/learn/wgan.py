@@ -293,21 +293,12 @@ def downsample(curve: np.ndarray, n: int = 1000) -> np.ndarray:
 
 def save_checkpoint(path: str | Path, state: dict[str, Any]) -> Path:
     """Write a checkpoint dict atomically (``torch.save``; tensors, numbers, strings, lists)."""
-    import os
-    import tempfile
+    from mimika.io.atomic import atomic_open
 
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
     state = {"version": CHECKPOINT_VERSION, **state}
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            torch.save(state, f)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, p)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_open(p) as f:
+        torch.save(state, f)
     log.info("wrote %s (%d bytes)", p, p.stat().st_size)
     return p
 
