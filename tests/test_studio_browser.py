@@ -110,6 +110,12 @@ def test_head_and_eye_sliders_turn_joints(page):
     assert abs(q[3]) < 0.99
 
 
+REPLAY_STATE = """(() => { const p = mimikaStudio.player, a = p.audio; return {
+    mode: p.mode, key: p.key, duration: p.duration, end: p.end(), playError: p.playError,
+    src: a.src, readyState: a.readyState, networkState: a.networkState,
+    error: a.error && a.error.code, paused: a.paused, currentTime: a.currentTime}; })()"""
+
+
 def test_speak_plays_audio_and_moves_the_mouth(page, record_property):
     page.fill("#speech-text", "Hello, this is the news. We talk about the weather.")
     page.click("#btn-speak")
@@ -135,7 +141,11 @@ def test_speak_plays_audio_and_moves_the_mouth(page, record_property):
                            timeout=20_000)
     # replay through <audio>: its currentTime is the clock
     page.click("#btn-play")
-    page.wait_for_function("mimikaStudio.audio().currentTime > 0.3", timeout=30_000)
+    try:
+        page.wait_for_function("mimikaStudio.audio().currentTime > 0.3", timeout=30_000)
+    except Exception:
+        state = page.evaluate(REPLAY_STATE)
+        pytest.fail(f"replay did not advance the <audio> clock: {state}")
     seen = 0.0
     for _ in range(15):
         seen = max(seen, page.evaluate(mouth))

@@ -12,17 +12,15 @@ import time
 
 from mimika.errors import ParameterError
 
-_TRAIN: dict[int, argparse._SubParsersAction] = {}
-
 
 def train_subparsers(sub) -> argparse._SubParsersAction:
-    """The sub-parsers of ``mimika train`` (created on first call for this ``sub``)."""
-    key = id(sub)
-    if key not in _TRAIN:
+    """The sub-parsers of ``mimika train`` (created on the first call for this ``sub``)."""
+    t = sub.choices.get("train")
+    if t is None:
         t = sub.add_parser("train", help="train a learned model (transitions, …)")
-        _TRAIN[key] = t.add_subparsers(dest="train_what", required=True,
-                                       parser_class=type(t), metavar="MODEL")
-    return _TRAIN[key]
+        t.models = t.add_subparsers(dest="train_what", required=True,
+                                    parser_class=type(t), metavar="MODEL")
+    return t.models
 
 
 def cmd_train_transitions(args: argparse.Namespace) -> int:

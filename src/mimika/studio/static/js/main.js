@@ -19,7 +19,7 @@ function emptyProject(text = DEFAULT_TEXT) {
 
 const plainText = (p) => p.timeline.speech.tokens.filter((t) => "text" in t).map((t) => t.text).join("");
 
-const S = { project: null, pose: {}, blended: null, source: "designer", status: null };
+const S = { project: null, pose: {}, blended: null, source: "designer", status: null, endedAt: null };
 let viewer, panel, editor, player, exprs;
 
 function setSource(s) { S.source = s; $("mode-badge").textContent = s; }
@@ -116,8 +116,8 @@ async function remix(key) {
 
 async function play() {
   setSource("playing");
-  const from = editor.time >= player.end() - 0.05 ? 0 : editor.time;
-  await player.play(from, remix);
+  // the playhead still where the last playback ended: play again from the start
+  await player.play(editor.time === S.endedAt ? 0 : editor.time, remix);
 }
 
 function projectName() {
@@ -175,6 +175,7 @@ function loop() {
   if (t !== null && t >= 0) {
     if (player.finished(t)) {
       player.stop();
+      S.endedAt = editor.time;
     } else {
       const f = player.frameAt(t);
       viewer.apply(f);

@@ -111,10 +111,19 @@ export class Player {
       if (r) { this.segments = r.segments; this.sentences = r.sentences; this.duration = r.duration; }
       else this.key = null;
     }
+    if (from >= this.end() - 0.05) from = 0;  // at the end: replay from the start
     if (this.key) {
       this.audio.currentTime = Math.min(from, this.duration);
       this.mode = from < this.duration ? "audio" : "free";
-      if (this.mode === "audio") await this.audio.play();
+      if (this.mode === "audio") {
+        try {
+          await this.audio.play();
+        } catch (e) {  // blocked or unplayable: animate without sound rather than freeze
+          this.playError = `${e.name}: ${e.message}`;
+          this.onError && this.onError(`could not play the audio (${e.name}); playing silently`);
+          this.mode = "free";
+        }
+      }
     } else {
       this.mode = "free";
     }
