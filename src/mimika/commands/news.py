@@ -53,11 +53,14 @@ def cmd_news(args: argparse.Namespace) -> int:
     text, source = _read_article(args)
     lang = args.lang or (args.example or "en")
     check_lang(lang)
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers={args.workers} must be 1 or more")
     if args.ablations is None and args.output is None:
         raise ParameterError("give the output video with -o news.mp4 (or --ablations DIR)")
     article = parse_article(text, source=source)
     kw = dict(lang=lang, head=args.head, fps=args.fps, size=args.size, view=args.view,
-              voice=args.voice, rate=args.rate, samples=args.samples, seed=args.seed)
+              voice=args.voice, rate=args.rate, samples=args.samples, seed=args.seed,
+              workers=args.workers)
     if args.ablations is not None:
         def prog(name: str, done: int, total: int, _bars: dict = {}) -> None:  # noqa: B006
             bar = _bars.setdefault(name, progress_bar(args.quiet, f"{name:<18}"))
@@ -106,6 +109,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--samples", type=int, default=0,
                    help="multisample anti-aliasing samples (0: fastest)")
     p.add_argument("--seed", type=int, help="random seed of the behaviours")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="rendering processes (default: one per core, up to 4, for videos "
+                        "over 6 s; 1 renders in this process)")
     p.add_argument("--aus", metavar="CSV", help="also write the final AU track as CSV")
     p.add_argument("--ablations", metavar="DIR",
                    help="render the seed 004 ablation set (all features, then each off) "

@@ -183,28 +183,35 @@ def _check_output(out: Path) -> None:
 
 def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str = "front",
                   samples: int = 0, skin_shader: bool = True, chunk: int = 50,
-                  timings: dict[str, float] | None = None):
-    """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head."""
-    from mimika.render import Renderer
+                  workers: int | None = 1, timings: dict[str, float] | None = None):
+    """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head.
+
+    Frames are deformed and drawn in chunks of ``chunk`` by ``workers`` processes
+    (:mod:`mimika.render.parallel`; None: one per core for long tracks). The images do not
+    depend on ``workers``.
+    """
     from mimika.render.camera import frame_head
+    from mimika.render.parallel import default_workers, render_track
     from mimika.render.skin import NEWS_LIGHTING, SkinParams
 
     tm = timings if timings is not None else {}
     w, h = size
+    if workers is None:
+        workers = default_workers(track.n_frames, chunk)
     cam = frame_head(rig.head, view, aspect=w / h, fill=FILL)
-    # video: the blurred skin irradiance is refreshed every second frame (see SkinParams)
-    skin = SkinParams(refresh=2) if skin_shader else False
-    with Renderer(rig.head, size=size, samples=samples, skin_shader=skin,
-                  lighting=NEWS_LIGHTING) as r:
-        for i0 in range(0, track.n_frames, chunk):
-            t0 = time.perf_counter()
-            pos = rig.deform_batch(track.values[i0:i0 + chunk], track.channels)
-            tm["deform"] = tm.get("deform", 0.0) + time.perf_counter() - t0
-            for k in range(len(next(iter(pos.values())))):
-                t0 = time.perf_counter()
-                img = r.render({name: p[k] for name, p in pos.items()}, camera=cam)
-                tm["render"] = tm.get("render", 0.0) + time.perf_counter() - t0
-                yield img
+    # video: the blurred skin irradiance is refreshed every third frame (see SkinParams)
+    skin = SkinParams(refresh=3) if skin_shader else False
+    frames = render_track(rig, track.values, track.channels, camera=cam, size=size,
+                          samples=samples, skin=skin, lighting=NEWS_LIGHTING, chunk=chunk,
+                          workers=workers)
+    tm["workers"] = workers
+    while True:  # the time spent waiting for frames
+        t0 = time.perf_counter()
+        img = next(frames, None)
+        tm["render"] = tm.get("render", 0.0) + time.perf_counter() - t0
+        if img is None:
+            return
+        yield img
 
 
 def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en",
@@ -214,8 +221,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
                 voice: str | None = None, rate: int = 165, samples: int = 0,
                 seed: int | None = None, subtitles: bool = True,
                 aus: str | os.PathLike | None = None, crf: int = 23,
-                preset: str = "veryfast", rig: Any = None, news: NewsTrack | None = None
-                ) -> NewsResult:
+                preset: str = "veryfast", rig: Any = None, news: NewsTrack | None = None,
+                workers: int | None = None) -> NewsResult:
     """Read ``text`` (plain article or ``<speak>`` script) as a newsreader into an MP4.
 
     Writes ``out`` (H.264 yuv420p + AAC, ``fps`` frames/s, frame i showing time i / fps, video
@@ -223,6 +230,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     unless ``subtitles=False``, and the final AU track as CSV to ``aus`` if given. All files
     are written atomically. ``layers``: enabled features of :data:`FEATURES` (default all).
     ``rig``/``news`` reuse a loaded head / a computed :class:`NewsTrack` (ablations).
+    ``workers``: rendering processes (None: one per core for videos over 6 s; 1: none). With
+    more than one, call this from a script under ``if __name__ == "__main__":``.
     """
     from mimika.render.video import VideoWriter
 
@@ -266,7 +275,7 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
                      preset=preset) as vw:
         for i, img in enumerate(render_frames(rig, track, size=(w, h), view=view,
                                               samples=samples, skin_shader="skin" in enabled,
-                                              timings=tm)):
+                                              workers=workers, timings=tm)):
             vw.write(img)
             if progress is not None:
                 progress(i + 1, n)

@@ -112,23 +112,25 @@ def incidence_matrix(faces: np.ndarray, n_vertices: int) -> sp.csr_matrix:
 
 
 def vertex_normals(
-    positions: np.ndarray, faces: np.ndarray, incidence: sp.csr_matrix | None = None
+    positions: np.ndarray,
+    faces: np.ndarray | tuple[np.ndarray, ...],
+    incidence: sp.csr_matrix | None = None,
 ) -> np.ndarray:
     """Area-weighted smooth unit normals, shape (N, 3) float32, of ``positions`` (N, 3).
 
-    ``faces`` (F, 3) are counter-clockwise seen from outside. Vertices in no (or only
-    degenerate) faces get (0, 0, 1).
+    ``faces`` (F, 3) are counter-clockwise seen from outside; a tuple of the three corner
+    index columns, each contiguous, is faster (what the renderer passes every frame).
+    Vertices in no (or only degenerate) faces get (0, 0, 1).
     """
     v = np.asarray(positions, np.float32)
+    corners = faces if isinstance(faces, tuple) else tuple(
+        np.ascontiguousarray(faces[:, k]) for k in range(3))
     if incidence is None:
-        incidence = incidence_matrix(faces, len(v))
-    a, b, c = v[faces[:, 0]], v[faces[:, 1]], v[faces[:, 2]]
-    e1, e2 = b - a, c - a
-    fn = np.empty_like(e1)  # cross(e1, e2), twice the area
-    fn[:, 0] = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
-    fn[:, 1] = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
-    fn[:, 2] = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    n = np.asarray(incidence @ fn, np.float32)
+        incidence = incidence_matrix(np.stack(corners, 1), len(v))
+    a, e1, e2 = (np.take(v, c, axis=0) for c in corners)
+    e1 -= a
+    e2 -= a
+    n = np.asarray(incidence @ np.cross(e1, e2), np.float32)  # face normals: twice the area
     n[:, 2] += 1e-15  # zero normals become +z after normalising
     n /= np.sqrt(np.einsum("ij,ij->i", n, n))[:, None]
     return n
@@ -150,6 +152,7 @@ class _GpuObject:
             log.info("object %r: faces wind clockwise seen from outside; flipping", obj.name)
             faces = faces[:, [0, 2, 1]].copy()
         self.faces = faces
+        self.corners = tuple(np.ascontiguousarray(faces[:, k]) for k in range(3))
         self.incidence = incidence_matrix(faces, obj.n_vertices)
         self.parts: list[tuple[Material, int, int]] = []  # material, first index, index count
         first = 0
@@ -172,7 +175,7 @@ class _GpuObject:
                 return
             positions = self.rest
         self.interleaved[:, :3] = positions
-        self.interleaved[:, 3:] = vertex_normals(positions, self.faces, self.incidence)
+        self.interleaved[:, 3:] = vertex_normals(positions, self.corners, self.incidence)
         self.vbo.write(self.interleaved)
         self.holds_rest = positions is self.rest
 
@@ -192,7 +195,7 @@ def _winding_inward(vertices: np.ndarray, faces: np.ndarray) -> bool:
     return float(np.einsum("ij,ij->", fn, (a + b + c) / 3.0 - centre)) < 0.0
 
 
-_GL_KEYS = ("bg_vao", "prog", "bg_prog", "fbo", "resolve", "desk_vao", "desk_prog")
+_GL_KEYS = ("bg_vao", "prog", "bg_prog", "fbo", "resolve", "desk_vao", "desk_prog", "bg_fbo")
 
 
 class Renderer:
@@ -283,7 +286,7 @@ class Renderer:
             ctx.viewport = (0, 0, *self.size)
             fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
             ctx.disable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
-            gl["bg_vao"].render(ctx.TRIANGLES, vertices=3)
+            self._backdrop(gl, ctx, fbo)
             ctx.enable(ctx.DEPTH_TEST)
             prog = gl["prog"]
             prog["u_view"].write(cam.view_matrix.T.astype("f4").tobytes())
@@ -317,7 +320,9 @@ class Renderer:
                 ctx.disable(ctx.DEPTH_TEST)
                 ctx.enable(ctx.BLEND)
                 ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
+                fbo.scissor = gl["desk_rect"]  # shade only the rows the desk covers
                 gl["desk_vao"].render(ctx.TRIANGLES, vertices=3)
+                fbo.scissor = None
                 ctx.disable(ctx.BLEND)
             if gl["resolve"] is not fbo:
                 ctx.copy_framebuffer(gl["resolve"], fbo)
@@ -328,6 +333,29 @@ class Renderer:
             raise RenderError(f"rendering {self.head.name!r} failed: {exc}") from exc
         w, h = self.size
         return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
+
+    def invalidate(self) -> None:
+        """Forget state reused between frames (the skin shader's blurred irradiance): the
+        next frame computes everything afresh, as after a cut. Rendering a video in chunks
+        calls this at each chunk so the images do not depend on how the chunks are shared
+        out among processes."""
+        if self._skin is not None:
+            self._skin.invalidate()
+
+    def _backdrop(self, gl: dict, ctx: Any, fbo: Any) -> None:
+        """Draw the backdrop; without MSAA it is drawn once and then copied (a blit is far
+        cheaper than shading every pixel on a software rasteriser)."""
+        if gl["fbo"] is not gl["resolve"]:  # multisampled: no blit into it
+            gl["bg_vao"].render(ctx.TRIANGLES, vertices=3)
+            return
+        if "bg_fbo" not in gl:
+            rb = ctx.renderbuffer(self.size, components=3)
+            gl["attachments"].append(rb)
+            gl["bg_fbo"] = ctx.framebuffer(rb)
+            gl["bg_fbo"].use()
+            gl["bg_vao"].render(ctx.TRIANGLES, vertices=3)
+            fbo.use()
+        ctx.copy_framebuffer(fbo, gl["bg_fbo"])
 
     def close(self) -> None:
         """Free this renderer's GPU objects (the shared GL context stays)."""
@@ -431,6 +459,8 @@ class Renderer:
             desk["u_top"].value = lit.desk
             gl["desk_prog"] = desk
             gl["desk_vao"] = ctx.vertex_array(desk, [])
+            rows = min(int(np.ceil((lit.desk + 0.006) * self.size[1])) + 1, self.size[1])
+            gl["desk_rect"] = (0, 0, self.size[0], rows)
         gl["bg_prog"] = bg
         gl["bg_vao"] = ctx.vertex_array(bg, [])
 

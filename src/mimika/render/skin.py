@@ -95,7 +95,7 @@ class SkinParams:
     specular: float = 8.0
     dtype: str = "f2"
     cull: bool = True
-    refresh: int = 1  #: recompute the blurred irradiance every ``refresh`` frames (video: 2)
+    refresh: int = 1  #: recompute the blurred irradiance every ``refresh`` frames (video: 3)
 
 
 def unit(v: V3) -> V3:
@@ -277,6 +277,10 @@ class SkinShader:
             self.blur_vao.render(ctx.TRIANGLES, vertices=3)
             src = dst
         self.result = self.tex[src]
+
+    def invalidate(self) -> None:
+        """The next :meth:`prepare` recomputes the irradiance even if ``refresh`` > 1."""
+        self._frame = -1
 
     def _visible_rect(self, view_matrix: np.ndarray) -> tuple[int, int, int, int] | None:
         """Texel rectangle (x, y, w, h) holding the skin that faces the camera, with a margin

@@ -56,7 +56,8 @@ vec3 specular(vec3 n, vec3 v, vec3 l, vec3 col) {
     float m2 = u_roughness * u_roughness;
     float t2 = (1.0 - ndh * ndh) / (ndh * ndh);
     float d = exp(-t2 / m2) / (3.14159 * m2 * ndh * ndh * ndh * ndh);
-    float f = 0.028 + 0.972 * pow(1.0 - max(dot(h, v), 0.0), 5.0);
+    float s = 1.0 - max(dot(h, v), 0.0), s2 = s * s;
+    float f = 0.028 + 0.972 * s2 * s2 * s;  // Schlick: (1 - h·v)^5
     return col * (u_specular * d * f * ndl * 4.0 / max(dot(hu, hu), 1e-4));
 }
 
