@@ -94,6 +94,9 @@ def test_train_gan_errors(tmp_path):
     with pytest.raises(MimikaError, match="not a folder"):
         gan_cmd.train_gan_command(p.parse_args(["--data", str(tmp_path / "no"), "-o",
                                                 str(tmp_path / "x.pt")]))
+    with pytest.raises(MimikaError, match=r"--classifier .* needs --conditional"):
+        gan_cmd.train_gan_command(p.parse_args(["--classifier", "3", "-o",
+                                                str(tmp_path / "x.pt")]))
 
 
 @pytest.mark.skipif(not os.environ.get("MIMIKA_MOTION_DIR"),

@@ -166,6 +166,9 @@ def add_train_gan_arguments(p: argparse.ArgumentParser) -> None:
                    help="generator iterations (default 50000; 20000 with --conditional)")
     p.add_argument("--conditional", action="store_true",
                    help="train the conditional WGAN-GP with emotion labels")
+    p.add_argument("--classifier", type=float, default=None, metavar="W",
+                   help="with --conditional: weight of the auxiliary classifier loss "
+                        "(default 10; 0 trains a plain conditional WGAN-GP)")
     p.add_argument("--test-take", action="append", metavar="NAME",
                    help="held-out take (file stem, repeatable; default apfel)")
     p.add_argument("--seed", type=int, default=0)
@@ -189,6 +192,9 @@ def train_gan_command(args: argparse.Namespace) -> int:
         v = getattr(args, name)
         if v is not None and v < 1:
             raise ParameterError(f"--{name.replace('_', '-')} {v} must be ≥ 1")
+    if args.classifier is not None and (args.classifier < 0 or not args.conditional):
+        raise ParameterError(f"--classifier {args.classifier} needs --conditional and must "
+                             "be ≥ 0")
     try:
         import torch
     except ImportError:
@@ -197,6 +203,7 @@ def train_gan_command(args: argparse.Namespace) -> int:
     state, res = train_controller(args.data, latent_dim=args.latent, n_critic=args.n_critic,
                                   iters=args.iters, conditional=args.conditional,
                                   test_takes=args.test_take, seed=args.seed,
+                                  classifier=args.classifier,
                                   encoder_steps=args.encoder_steps,
                                   progress=progress_bar(args.quiet, "training"))
     save_checkpoint(args.output, state)

@@ -8,7 +8,11 @@ seed's latent sliders ``z ~ N(0, I)`` and adds a label embedding:
 * WGAN-GP (Gulrajani et al. 2017): gradient penalty λ = 10 on label-matched interpolates instead
   of weight clipping, Adam (1e-4, β = 0.5, 0.9), ``n_critic`` 5;
 * class-balanced batches (label uniform, frame uniform within the label), since neutral frames
-  outnumber the rest several times over.
+  outnumber the rest several times over;
+* an auxiliary classifier (AC-GAN, Odena et al. 2017) ``x (B, K) → label logits`` learns the
+  labels of real frames, and the generator's loss adds ``classifier`` × its cross-entropy on
+  generated frames, so a frame asked for "surprise" looks like the real surprise frames, not
+  like a neutral face near the class border (the classifier is not saved).
 
 Labels are those of :mod:`mimika.learn.gan_data` (nearest library prototype). Checkpoints have
 the same layout as :mod:`mimika.learn.wgan`'s with ``kind = "cgan"`` and ``labels``.
@@ -50,6 +54,7 @@ class CGANConfig:
     lr: float = 1e-4
     betas: tuple[float, float] = (0.5, 0.9)
     gp: float = 10.0
+    classifier: float = 10.0  #: weight of the auxiliary classifier loss (0: plain WGAN-GP)
     leak: float = 0.2
     eval_batch: int = 256
     seed: int = 0
@@ -60,8 +65,9 @@ class CGANConfig:
             v = getattr(self, name)
             if not isinstance(v, int) or v < 1:
                 raise ParameterError(f"{name}={v!r} must be an integer ≥ 1")
-        if not self.lr > 0 or self.gp < 0:
-            raise ParameterError(f"lr={self.lr!r} must be > 0 and gp={self.gp!r} ≥ 0")
+        if not self.lr > 0 or self.gp < 0 or self.classifier < 0:
+            raise ParameterError(f"lr={self.lr!r} must be > 0, gp={self.gp!r} and "
+                                 f"classifier={self.classifier!r} ≥ 0")
         return self
 
 
@@ -145,8 +151,11 @@ def train_cgan(train: np.ndarray, train_labels: np.ndarray, labels: Sequence[str
     torch.manual_seed(cfg.seed)
     G = CondGenerator(cfg.latent_dim, K, L, cfg.hidden, cfg.embed, cfg.leak)
     C = CondCritic(K, L, cfg.hidden, cfg.embed, cfg.leak)
+    Q = _mlp(K, cfg.hidden, L, cfg.leak)  # auxiliary classifier: frame → label logits
     og = torch.optim.Adam(G.parameters(), lr=cfg.lr, betas=cfg.betas)
     oc = torch.optim.Adam(C.parameters(), lr=cfg.lr, betas=cfg.betas)
+    oq = torch.optim.Adam(Q.parameters(), lr=cfg.lr, betas=cfg.betas)
+    ce = nn.functional.cross_entropy
     gen = torch.Generator().manual_seed(cfg.seed)
     B, d, E = cfg.batch, cfg.latent_dim, cfg.eval_batch
 
@@ -171,8 +180,16 @@ def train_cgan(train: np.ndarray, train_labels: np.ndarray, labels: Sequence[str
             oc.zero_grad(set_to_none=True)
             loss.backward()
             oc.step()
+        if cfg.classifier > 0:  # the classifier learns the labels of real frames
+            x, y = real_batch(B)
+            oq.zero_grad(set_to_none=True)
+            ce(Q(x), y).backward()
+            oq.step()
         y = torch.randint(0, L, (B,), generator=gen)
-        gl = -C(G(torch.randn(B, d, generator=gen), y), y).mean()
+        f = G(torch.randn(B, d, generator=gen), y)
+        gl = -C(f, y).mean()
+        if cfg.classifier > 0:  # AC-GAN: generated frames should be classified as asked
+            gl = gl + cfg.classifier * ce(Q(f), y)
         og.zero_grad(set_to_none=True)
         gl.backward()
         og.step()
@@ -189,8 +206,9 @@ def train_cgan(train: np.ndarray, train_labels: np.ndarray, labels: Sequence[str
             progress(it + 1, cfg.iters)
     secs = time.perf_counter() - t0
     h = hist.numpy()
-    log.info("cGAN d=%d: %d iterations in %.1f s; final W train %.4f test %.4f", d, cfg.iters,
-             secs, float(np.mean(h[-100:, 0])), float(np.nanmean(h[-100:, 1])))
+    log.info("cGAN d=%d: %d iterations in %.1f s; final W train %.4f%s", d, cfg.iters, secs,
+             float(np.mean(h[-100:, 0])),
+             "" if xt is None else f" test {float(np.mean(h[-100:, 1])):.4f}")
     return CGANResult(G.eval(), C.eval(), cfg, norm, tuple(labels), h[:, 0].copy(),
                       h[:, 1].copy(), secs)
 

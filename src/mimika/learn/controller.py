@@ -311,11 +311,13 @@ def train_controller(data: str | os.PathLike | None = None, *, latent_dim: int =
                      n_critic: int | None = None, iters: int | None = None,
                      conditional: bool = False, test_takes: Sequence[str] | None = None,
                      seed: int = 0, encoder_steps: int = 3000,
+                     classifier: float | None = None,
                      progress: Progress | None = None) -> tuple[dict[str, Any], Any]:
     """Train a controller on a folder of takes (default ``$MIMIKA_MOTION_DIR``).
 
     Splits by take (``test_takes``, default ``apfel``; none when the folder lacks it), trains
-    the seed's WGAN (or, ``conditional``, the WGAN-GP with emotion labels), fits the inversion
+    the seed's WGAN (or, ``conditional``, the WGAN-GP with emotion labels and an auxiliary
+    classifier of weight ``classifier``, default 10), fits the inversion
     encoder and returns ``(checkpoint dict, training result)`` — save it with
     :func:`mimika.learn.wgan.save_checkpoint`.
     """
@@ -345,6 +347,8 @@ def train_controller(data: str | os.PathLike | None = None, *, latent_dim: int =
             cfg.n_critic = n_critic
         if iters is not None:
             cfg.iters = iters
+        if classifier is not None:
+            cfg.classifier = classifier
         res = train_cgan(train.values, train.labels, LABELS,
                          None if test is None else test.values,
                          None if test is None else test.labels, cfg, progress=progress)

@@ -81,10 +81,14 @@ def nn_label_histogram(samples: np.ndarray, reference: FrameSet) -> dict[str, fl
 
 
 def self_match_rate(controller: Any, reference: FrameSet, *, n: int = 1000,
-                    seed: int = 0) -> dict[str, Any]:
+                    seed: int = 0, real: FrameSet | None = None) -> dict[str, Any]:
     """Generate ``n`` frames per label; classify each by (a) its nearest held-out real frame's
     label and (b) the labelling prototypes. Returns overall and per-label match rates and the
-    confusion matrix of (a) (rows: asked label, columns: found label, over :data:`LABELS`)."""
+    confusion matrix of (a) (rows: asked label, columns: found label, over :data:`LABELS`).
+
+    ``real`` (e.g. the training frames) adds ``real_nn``: the rate (a) of real frames of each
+    label — what real faces score on this test, its practical ceiling.
+    """
     per_nn, per_proto, conf = {}, {}, []
     for i, lab in enumerate(controller.labels):
         _, x = controller.random(n, label=lab, seed=seed + i)
@@ -95,7 +99,14 @@ def self_match_rate(controller: Any, reference: FrameSet, *, n: int = 1000,
         per_proto[lab] = float(np.mean(pr == k))
         conf.append(np.bincount(nn, minlength=len(LABELS)).tolist())
     present = [lab for lab in controller.labels if reference.label_counts().get(lab, 0) > 0]
-    return {"nn": float(np.mean([per_nn[lab] for lab in present])),
+    out: dict[str, Any] = {}
+    if real is not None:
+        found = nn_labels(real.values, reference)
+        out["real_nn"] = {lab: float(np.mean(found[real.labels == LABELS.index(lab)]
+                                             == LABELS.index(lab)))
+                          for lab in present if np.any(real.labels == LABELS.index(lab))}
+        out["real_nn_mean"] = float(np.mean(list(out["real_nn"].values())))
+    return out | {"nn": float(np.mean([per_nn[lab] for lab in present])),
             "prototype": float(np.mean(list(per_proto.values()))),
             "per_label_nn": per_nn, "per_label_prototype": per_proto,
             "confusion_nn": conf, "n_per_label": n, "labels_in_reference": present}
