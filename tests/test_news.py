@@ -245,3 +245,24 @@ def test_bad_input_gives_one_clear_error_and_writes_nothing(tmp_path, capsys, ar
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("mimika: error:") and msg in err[0]
     assert not out.exists() or not any(out.iterdir())
+
+
+@pytest.mark.render
+def test_rendering_workers_write_the_same_video(spoken, builtin_rig, tmp_path):
+    import av
+
+    from mimika.newsreader import NewsTrack, render_news
+
+    art, utt, paras = spoken
+    once = NewsTrack(None, utt, {}, paras, None)  # one synthesis for both videos
+
+    def frames(workers):
+        out = tmp_path / f"w{workers}.mp4"
+        render_news(art, out=out, size=(160, 120), seed=3, rig=builtin_rig, news=once,
+                    workers=workers, subtitles=False)
+        with av.open(str(out)) as c:
+            return [f.to_ndarray(format="rgb24") for f in c.decode(video=0)]
+
+    a, b = frames(1), frames(2)
+    assert len(a) == len(b) > 50
+    assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
