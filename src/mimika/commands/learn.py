@@ -58,8 +58,8 @@ def cmd_transition(args: argparse.Namespace) -> int:
     from mimika.learn.interp import transition
 
     out = args.output
-    if not out.lower().endswith((".csv", ".png")):
-        raise ParameterError(f"output {out!r} must be a .csv or .png file")
+    if not out.lower().endswith((".csv", ".png", ".mp4")):
+        raise ParameterError(f"output {out!r} must be a .csv, .png or .mp4 file")
     a = get_expression(args.start, args.intensity)
     b = get_expression(args.to, args.intensity)
     track = transition(a, b, duration=args.duration, fps=args.fps, model=args.model)
@@ -67,6 +67,12 @@ def cmd_transition(args: argparse.Namespace) -> int:
         from mimika.io.tracks import write_au_csv
 
         write_au_csv(track, out)
+    elif out.lower().endswith(".mp4"):
+        from mimika.face.heads import load_head
+        from mimika.render.video import write_track_video
+
+        _, rig = load_head(args.head)
+        write_track_video(rig, track, out)
     else:
         from mimika.learn.plots import transition_png
 
@@ -101,7 +107,7 @@ def register(sub) -> None:
     q.set_defaults(func=cmd_train_transitions)
 
     r = sub.add_parser("transition", help="a learned transition between two expressions "
-                       "(AU CSV or PNG plot + rendered strip)")
+                       "(AU CSV, PNG plot + rendered strip, or MP4 on the head)")
     r.add_argument("--from", dest="start", required=True, metavar="EXPR",
                    help="start expression (library name, e.g. happiness or neutral)")
     r.add_argument("--to", required=True, metavar="EXPR", help="target expression")
@@ -111,7 +117,7 @@ def register(sub) -> None:
     r.add_argument("--model", default=None, help="checkpoint (default: the shipped model)")
     r.add_argument("--frames", type=int, default=6,
                    help="rendered frames in the PNG strip (0: plot only)")
-    r.add_argument("--head", default="builtin", help="head for the PNG strip")
-    r.add_argument("-o", "--output", required=True, help=".csv (AU CSV) or .png")
+    r.add_argument("--head", default="builtin", help="head for the PNG strip and the MP4")
+    r.add_argument("-o", "--output", required=True, help=".csv (AU CSV), .png or .mp4")
     r.add_argument("-q", "--quiet", action="store_true")
     r.set_defaults(func=cmd_transition)

@@ -220,6 +220,23 @@ class VideoWriter:
             self.abort()
 
 
+def write_track_video(rig: Any, track: Any, path: str | os.PathLike, *,
+                      size: tuple[int, int] = (640, 480), view: str = "front", samples: int = 4,
+                      audio: np.ndarray | None = None, sr: int | None = None) -> Path:
+    """Render the AU ``track`` on ``rig``'s head into an H.264 (+ AAC with ``audio``) MP4 at
+    ``track.fps``, written atomically. Channels the rig does not model are left out."""
+    from mimika.render import Renderer
+
+    w, h = (int(s) // 2 * 2 for s in size)
+    keep = [c for c in track.channels if c in set(rig.supported)]
+    track = track.with_channels(keep)
+    with Renderer(rig.head, size=(w, h), samples=samples) as r, \
+            VideoWriter(path, fps=track.fps, size=(w, h), audio=audio, sr=sr) as out:
+        for pos in rig.deform_track(track):
+            out.write(r.render(pos, view=view))
+    return Path(path)
+
+
 def probe(path: str | os.PathLike) -> dict[str, Any]:
     """Codec names, frame count and durations (s) of a video file, by decoding it with PyAV.
 

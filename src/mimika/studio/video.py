@@ -31,19 +31,11 @@ def render_mp4(rig: Any, track: Any, path: str | Path, *, audio: np.ndarray | No
                view: str = "front") -> Path:
     """Render ``track`` on ``rig``'s head into an H.264/AAC MP4 at ``track.fps`` (atomic)."""
     from mimika.errors import ParameterError
-    from mimika.render import Renderer
-    from mimika.render.video import VideoWriter
+    from mimika.render.video import write_track_video
 
     if track.duration > MAX_SECONDS:
         raise ParameterError(f"the clip is {track.duration:.1f} s; the studio renders at most "
                              f"{MAX_SECONDS:.0f} s (use 'mimika render' for longer ones)")
-    w, h = (int(s) // 2 * 2 for s in size)
-    renderer = Renderer(rig.head, size=(w, h), samples=4)
-    try:
-        with VideoWriter(path, fps=track.fps, size=(w, h), audio=audio, sr=sr) as out:
-            for pos in rig.deform_track(track):
-                out.write(renderer.render(pos, view=view))
-    finally:
-        renderer.close()
+    write_track_video(rig, track, path, audio=audio, sr=sr, size=size, view=view)
     log.info("studio: wrote %s (%d frames)", path, track.n_frames)
     return Path(path)
