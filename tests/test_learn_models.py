@@ -127,45 +127,42 @@ def test_import_mimika_and_learn_do_not_load_torch():
     assert out.stdout.strip() == "False"
 
 
-def test_cli_transition_csv(tmp_path):
+def _transition_cli(*argv: str) -> int:
+    """``mimika transition …`` through the command module's parser."""
     import argparse
 
     from mimika.commands import learn
-    from mimika.io.tracks import read_au_csv
 
-    p = tmp_path / "t.csv"
     parser = argparse.ArgumentParser()
     sub = parser.add_subparsers(dest="command", required=True)
     learn.register(sub)
-    args = parser.parse_args(["transition", "--from", "happiness", "--to", "surprise",
-                              "--duration", "0.5", "-o", str(p), "-q"])
-    assert args.func(args) == 0
+    args = parser.parse_args(["transition", *argv])
+    return args.func(args)
+
+
+def test_cli_transition_csv(tmp_path):
+    from mimika.io.tracks import read_au_csv
+
+    p = tmp_path / "t.csv"
+    assert _transition_cli("--from", "happiness", "--to", "surprise", "--duration", "0.5",
+                           "-o", str(p), "-q") == 0
     tr = read_au_csv(p)
     assert tr.n_frames == 16
 
 
 @pytest.mark.render
 def test_cli_transition_mp4_moves_from_one_face_to_the_other(tmp_path):
-    import argparse
-
     import av
 
-    from mimika.commands import learn
     from mimika.errors import ParameterError
 
     p = tmp_path / "t.mp4"
-    parser = argparse.ArgumentParser()
-    sub = parser.add_subparsers(dest="command", required=True)
-    learn.register(sub)
-    args = parser.parse_args(["transition", "--from", "neutral", "--to", "surprise",
-                              "--duration", "0.5", "-o", str(p), "-q"])
-    assert args.func(args) == 0
+    assert _transition_cli("--from", "neutral", "--to", "surprise", "--duration", "0.5",
+                           "-o", str(p), "-q") == 0
     with av.open(str(p)) as c:
         frames = [f.to_ndarray(format="rgb24").astype(int) for f in c.decode(video=0)]
     assert len(frames) == 16 and frames[0].shape == (480, 640, 3)
     # the brows rise: the upper face changes between the first and the last frame
     assert np.abs(frames[-1][120:240] - frames[0][120:240]).mean() > 1.0
     with pytest.raises(ParameterError, match=r"\.csv, \.png or \.mp4"):
-        args = parser.parse_args(["transition", "--from", "neutral", "--to", "surprise",
-                                  "-o", str(tmp_path / "t.gif")])
-        args.func(args)
+        _transition_cli("--from", "neutral", "--to", "surprise", "-o", str(tmp_path / "t.gif"))
