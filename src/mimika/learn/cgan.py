@@ -31,7 +31,7 @@ import torch
 from torch import nn
 
 from mimika.errors import ParameterError
-from mimika.learn.wgan import Normaliser, _as_tensor, downsample
+from mimika.learn.wgan import Normaliser, _as_tensor, check_counts, downsample
 
 log = logging.getLogger(__name__)
 
@@ -60,11 +60,8 @@ class CGANConfig:
     seed: int = 0
 
     def check(self) -> CGANConfig:
-        for name in ("latent_dim", "hidden", "embed", "n_critic", "iters", "batch",
-                     "eval_batch"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or v < 1:
-                raise ParameterError(f"{name}={v!r} must be an integer ≥ 1")
+        check_counts(self, "latent_dim", "hidden", "embed", "n_critic", "iters", "batch",
+                     "eval_batch")
         if not self.lr > 0 or self.gp < 0 or self.classifier < 0:
             raise ParameterError(f"lr={self.lr!r} must be > 0, gp={self.gp!r} and "
                                  f"classifier={self.classifier!r} ≥ 0")

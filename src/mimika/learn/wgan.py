@@ -40,6 +40,14 @@ Progress = Callable[[int, int], None]
 CHECKPOINT_VERSION = 1
 
 
+def check_counts(config: Any, *names: str) -> None:
+    """Raise a ParameterError unless each of ``config``'s fields ``names`` is an int ≥ 1."""
+    for name in names:
+        v = getattr(config, name)
+        if not isinstance(v, int) or v < 1:
+            raise ParameterError(f"{name}={v!r} must be an integer ≥ 1")
+
+
 @dataclass
 class WGANConfig:
     """Hyper-parameters (seed 001 defaults; ``n_critic`` 20 is the seed's final choice)."""
@@ -59,10 +67,7 @@ class WGANConfig:
     critic_seed: int = 1  # critic init: same for every latent_dim (sweep: critic held identical)
 
     def check(self) -> WGANConfig:
-        for name in ("latent_dim", "hidden", "n_critic", "iters", "batch", "eval_batch"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or v < 1:
-                raise ParameterError(f"{name}={v!r} must be an integer ≥ 1")
+        check_counts(self, "latent_dim", "hidden", "n_critic", "iters", "batch", "eval_batch")
         for name in ("lr", "clip"):
             if not getattr(self, name) > 0:
                 raise ParameterError(f"{name}={getattr(self, name)!r} must be > 0")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import json
 import logging
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
@@ -96,8 +97,13 @@ def material(name: str) -> Material:
     return mats["_default"]
 
 
+_INCLUDE = re.compile(r'^#include "([\w.]+)"[ \t]*$', re.MULTILINE)
+
+
 def _shader(name: str) -> str:
-    return resources.files("mimika.render").joinpath(f"shaders/{name}").read_text("utf-8")
+    """The source of ``shaders/name`` with its ``#include "file"`` lines expanded."""
+    text = resources.files("mimika.render").joinpath(f"shaders/{name}").read_text("utf-8")
+    return _INCLUDE.sub(lambda m: _shader(m.group(1)).rstrip("\n"), text)
 
 
 def incidence_matrix(faces: np.ndarray, n_vertices: int) -> sp.csr_matrix:

@@ -14,14 +14,7 @@ uniform vec3 u_scatter;     // tint of light wrapped past the terminator (skin: 
 uniform float u_alpha;      // < 1: glass-like, premultiplied (specular stays)
 uniform float u_backface;   // brightness of back faces (cavities seen from outside)
 
-uniform vec3 u_key_dir;
-uniform vec3 u_key_col;
-uniform vec3 u_fill_dir;
-uniform vec3 u_fill_col;
-uniform vec3 u_rim_dir;
-uniform vec3 u_rim_col;
-uniform vec3 u_sky;
-uniform vec3 u_ground;
+#include "lights.glsl"
 uniform float u_exposure;
 
 out vec4 f_color;

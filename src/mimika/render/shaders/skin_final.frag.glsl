@@ -11,20 +11,10 @@ uniform sampler2D u_irr;
 uniform vec3 u_base;
 uniform float u_specular;
 uniform float u_roughness;
-uniform float u_wrap;
-uniform vec3 u_scatter;
 uniform vec3 u_mix;        // share of blurred irradiance per channel
 uniform float u_backface;
-
-uniform vec3 u_key_dir;
-uniform vec3 u_key_col;
-uniform vec3 u_fill_dir;
-uniform vec3 u_fill_col;
-uniform vec3 u_rim_dir;
-uniform vec3 u_rim_col;
-uniform vec3 u_sky;
-uniform vec3 u_ground;
 uniform float u_exposure;
+#include "skin_light.glsl"
 
 out vec4 f_color;
 
@@ -38,13 +28,6 @@ vec3 tonemap(vec3 c) {
     vec3 knee = vec3(0.8);
     vec3 over = max(x - knee, 0.0);
     return min(x, knee) + over / (1.0 + over / (1.0 - knee.x));
-}
-
-vec3 wrapped(vec3 n, vec3 l, vec3 col) {
-    float ndl = dot(n, l);
-    float lambert = max(ndl, 0.0);
-    float w = max((ndl + u_wrap) / (1.0 + u_wrap), 0.0);
-    return col * (lambert + max(w - lambert, 0.0) * u_scatter);
 }
 
 vec3 specular(vec3 n, vec3 v, vec3 l, vec3 col) {
@@ -69,8 +52,7 @@ void main() {
         facing = u_backface;
     }
     vec3 v = normalize(-v_pos);
-    vec3 direct = wrapped(n, u_key_dir, u_key_col) + wrapped(n, u_fill_dir, u_fill_col)
-                + wrapped(n, u_rim_dir, u_rim_col) + mix(u_ground, u_sky, 0.5 + 0.5 * n.y);
+    vec3 direct = skin_diffuse(n);
     vec4 t = texture(u_irr, v_uv);
     vec3 blurred = t.a > 1e-3 ? t.rgb / t.a : direct;
     float cover = smoothstep(0.05, 0.6, t.a);
