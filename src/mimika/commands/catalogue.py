@@ -7,8 +7,8 @@ import json
 
 
 def cmd_aus(args: argparse.Namespace) -> int:
-    from mimika.face.blendshape import load_table
-    from mimika.face.field import load_fields
+    from mimika.face.rigs.blendshape import load_table
+    from mimika.face.rigs.field import load_fields
     from mimika.facs import AU_CATALOGUE
 
     builtin = set(load_fields().aus)

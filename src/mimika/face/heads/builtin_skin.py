@@ -1,4 +1,4 @@
-"""mimika's built-in head, made entirely by code: a stylised, closed, animatable human head.
+"""The built-in head's skin: one implicit surface sampled along rays, with eye and mouth pockets.
 
 The skin is the outer zero set of one implicit function (a smooth blend of ellipsoids, capsules
 and spheres plus a lip relief defined over directions), sampled along rays from a centre inside
@@ -15,7 +15,6 @@ Coordinates: cm, y up, +z forward (the face looks toward +z), +x toward the subj
 from __future__ import annotations
 
 import functools
-import itertools
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,17 +22,15 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
-from mimika.errors import ParameterError
 from mimika.face import meshgen as mg
-from mimika.face.head import Head, MeshObject, Part
 
-DATA = Path(__file__).parent / "data" / "builtin_head.json"
+DATA = Path(__file__).parents[1] / "data" / "builtin_head.json"
 
 RESOLUTIONS = (0, 1, 2)
 
 
 @functools.lru_cache(maxsize=1)
-def _params() -> dict:
+def params() -> dict:
     with open(DATA, encoding="utf-8") as fh:
         return json.load(fh)
 
@@ -123,7 +120,7 @@ def _eval_ops(ops: list, p: np.ndarray) -> np.ndarray:
 
 
 @dataclass
-class _Shape:
+class Shape:
     """The head's shape functions: the implicit skin and the direction-space feature curves."""
 
     centre: np.ndarray
@@ -255,9 +252,9 @@ class _Shape:
 
 
 @functools.lru_cache(maxsize=1)
-def _shape() -> _Shape:
-    P = _params()
-    return _Shape(np.asarray(P["centre"], float), P["field"], P["mouth"], P["eyes"])
+def shape() -> Shape:
+    P = params()
+    return Shape(np.asarray(P["centre"], float), P["field"], P["mouth"], P["eyes"])
 
 
 # =============================================================================================
@@ -290,10 +287,10 @@ class _Builder:
         return idx
 
 
-def _build_skin(res: int):
-    P = _params()
+def build_skin(res: int):
+    P = params()
     G = P["grid"]
-    S = _shape()
+    S = shape()
     sc = G["resolution_scale"][res]
     B = _Builder(P["r_max"])
 
@@ -454,7 +451,7 @@ def _build_skin(res: int):
 # =============================================================================================
 
 
-def _opening_loop(info: dict, c_lo: int, c_hi: int, j_lower: int) -> np.ndarray:
+def opening_loop(info: dict, c_lo: int, c_hi: int, j_lower: int) -> np.ndarray:
     """Boundary loop of a slit opening between corner columns ``c_lo`` < ``c_hi``.
 
     Ordered: corner c_lo, lower copies left→right, corner c_hi, upper copies right→left.
@@ -465,9 +462,9 @@ def _opening_loop(info: dict, c_lo: int, c_hi: int, j_lower: int) -> np.ndarray:
     return np.concatenate([[idx[c_lo, j_lower]], lower, [idx[c_hi, j_lower]], upper[::-1]])
 
 
-def _eye_socket(V: np.ndarray, loop: np.ndarray, centre: np.ndarray, res: int, ey: dict):
+def eye_socket(V: np.ndarray, loop: np.ndarray, centre: np.ndarray, res: int, ey: dict):
     """Rings from the lid margin back round a sphere behind the eyeball, closed at the back."""
-    sc = _params()["grid"]["resolution_scale"][res]
+    sc = params()["grid"]["resolution_scale"][res]
     m = V[loop] - centre
     rho = np.linalg.norm(m, axis=1)
     u = m / rho[:, None]
@@ -500,9 +497,9 @@ def _eye_socket(V: np.ndarray, loop: np.ndarray, centre: np.ndarray, res: int, e
     return P, F
 
 
-def _mouth_pocket(V: np.ndarray, loop: np.ndarray, res: int):
+def mouth_pocket(V: np.ndarray, loop: np.ndarray, res: int):
     """The mouth cavity: rings from the lips' inner edges back into a closed dark bag."""
-    P = _params()["mouth_cavity"]
+    P = params()["mouth_cavity"]
     m = V[loop]
     xc = np.abs(m[:, 0]).max()
     # angle round the mouth: 0 at the +x corner, pi/2 upper middle, pi at the -x corner
@@ -540,371 +537,12 @@ def _mouth_pocket(V: np.ndarray, loop: np.ndarray, res: int):
     return Pp, F
 
 
-# =============================================================================================
-# eyes, teeth, tongue, brows
-# =============================================================================================
 
 
-def _eyeball(side: int, res: int) -> MeshObject:
-    ey = _params()["eyes"]
-    sc = _params()["grid"]["resolution_scale"][res]
-    R = ey["radius"]
-    c = np.array(ey["centre"], float) * [side, 1, 1]
-    th_p = np.arcsin(ey["pupil_radius"] / R)
-    th_i = np.arcsin(ey["iris_radius"] / R)
-    n_p, n_i, n_s = (max(1, round(k * sc)) for k in ey["rings"])
-    th = np.concatenate([np.linspace(0, th_p, n_p + 1)[1:], np.linspace(th_p, th_i, n_i + 1)[1:],
-                         np.linspace(th_i, np.pi, n_s + 1)[1:-1]])
-    nl = max(12, round(ey["n_lon"] * sc))
-    ph = np.linspace(0, 2 * np.pi, nl, endpoint=False)
-    TH, PH = np.meshgrid(th, ph, indexing="ij")
-    rho = R * np.sin(TH)
-    z = R * np.cos(TH)
-    # flattened, slightly concave iris disc
-    zi = R * np.cos(th_i) - ey["iris_depth"] * (1 - (rho / (R * np.sin(th_i))) ** 2)
-    z = np.where(th_i + 1e-9 >= TH, zi, z)
-    pts = np.stack([rho * np.cos(PH), rho * np.sin(PH), z], -1).reshape(-1, 3)
-    front = np.array([[0, 0, R * np.cos(th_i) - ey["iris_depth"]]])
-    back = np.array([[0, 0, -R]])
-    v = np.concatenate([front, pts, back]) + c
-    rings = [1 + k * nl + np.arange(nl) for k in range(len(th))]
-    last = len(v) - 1
-    faces = [np.stack([rings[0], np.roll(rings[0], -1), np.zeros(nl, int)], 1)]
-    for r0, r1 in itertools.pairwise(rings):
-        faces.append(np.concatenate([np.stack([r0, r1, np.roll(r1, -1)], 1),
-                                     np.stack([r0, np.roll(r1, -1), np.roll(r0, -1)], 1)]))
-    faces.append(np.stack([rings[-1], np.full(nl, last), np.roll(rings[-1], -1)], 1))
-    # orient outward
-    tmp = np.concatenate(faces)
-    if mg.signed_volume(v - c, tmp) < 0:
-        faces = [f[:, ::-1] for f in faces]
-    pupil = np.concatenate(faces[: n_p])
-    iris = np.concatenate(faces[n_p : n_p + n_i])
-    sclera = np.concatenate(faces[n_p + n_i :])
-    name = "eye_L" if side > 0 else "eye_R"
-    return MeshObject(name, "eyes", v, (Part("sclera", sclera), Part("iris", iris),
-                                        Part("pupil", pupil)), pivot=c)
-
-
-def _teeth(which: str, res: int) -> MeshObject:
-    T = _params()["teeth"]
-    P = T[which]
-    sc = _params()["grid"]["resolution_scale"][res]
-    sgn = P["sign"]  # +1 upper (edge at the bottom), -1 lower (edge at the top)
-    widths = np.asarray(T["widths"], float)
-    phimax = np.radians(T["arch_end_deg"])
-    # arc length of the arch x = W sin(phi), z = z0 - D (1 - cos(phi))
-    W, D, z0 = P["arch_half_width"], P["arch_depth"], P["front_z"]
-    fine = np.linspace(0, phimax, 400)
-    ds = np.hypot(W * np.cos(fine), D * np.sin(fine))
-    arc = np.concatenate([[0], np.cumsum(0.5 * (ds[1:] + ds[:-1]) * np.diff(fine))])
-    bounds = np.concatenate([[0], np.cumsum(widths)]) * arc[-1] / widths.sum()
-    nper = max(3, round(T["samples_per_tooth"] * sc))
-    s_half, u_half = [0.0], [0.0]
-    for k in range(len(widths)):
-        loc = np.linspace(0, 1, nper + 1)[1:]
-        s_half.extend(bounds[k] + (bounds[k + 1] - bounds[k]) * loc)
-        u_half.extend(loc)
-    s_half = np.asarray(s_half)
-    u_half = np.asarray(u_half)
-    phi_half = np.interp(s_half, arc, fine)
-    phi = np.concatenate([-phi_half[:0:-1], phi_half])
-    u = np.concatenate([u_half[:0:-1], u_half])  # 0/1 at tooth borders
-    frac = np.clip(np.abs(phi) / phimax, 0, 1)
-    x = W * np.sin(phi)
-    z = z0 - D * (1 - np.cos(phi))
-    nx, nz = np.sin(phi) * D, np.cos(phi) * W
-    nn = np.hypot(nx, nz)
-    nx, nz = nx / nn, nz / nn
-    th = P["thickness"][0] + (P["thickness"][1] - P["thickness"][0]) * frac**1.5
-    border = np.abs(np.cos(np.pi * u))  # 1 at tooth borders, 0 mid-tooth
-    border = np.where(np.abs(phi) < 1e-9, 1.0, border)
-    edge = P["edge_y"] + sgn * T["scallop"] * border**3 + sgn * 0.06 * frac
-    gum = P["gum_y"] - sgn * T["gum_scallop"] * border**4
-    groove = T["groove"] * border**6
-    top = P["top_y"]
-    mid = 0.5 * (gum + edge)
-    # cross-section (offset along the outward normal, y); labial face at offset 0
-    sec = [
-        (-0.12, np.full_like(phi, top), "gums"),
-        (0.02 - 0.0 * groove, gum, "gums"),
-        (0.03 - groove, mid, "teeth"),
-        (-0.02 - groove, edge + sgn * 0.1, "teeth"),
-        (-0.14, edge, "teeth"),
-        (-th + 0.15, edge + sgn * 0.06, "teeth"),
-        (-th, gum, "teeth"),
-        (-th + 0.1, np.full_like(phi, top), "gums"),
-    ]
-    ns = len(sec)
-    pts = []
-    for off, yy, _ in sec:
-        off = np.broadcast_to(off, phi.shape)
-        pts.append(np.stack([x + off * nx, yy, z + off * nz], 1))
-    v = np.stack(pts, 1).reshape(-1, 3)  # index = i*ns + k
-    n_a = len(phi)
-    idx = np.arange(n_a * ns).reshape(n_a, ns)
-    faces = {"teeth": [], "gums": []}
-    for k in range(ns):
-        k2 = (k + 1) % ns
-        mat = "gums" if sec[k][2] == "gums" and sec[k2][2] == "gums" else (
-            "gums" if k == 0 or k == ns - 1 else "teeth")
-        q = np.stack([idx[:-1, k], idx[1:, k], idx[1:, k2], idx[:-1, k2]], 1)
-        faces[mat].append(np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]))
-    # end caps
-    c0 = len(v)
-    v = np.concatenate([v, v[idx[0]].mean(0, keepdims=True), v[idx[-1]].mean(0, keepdims=True)])
-    faces["gums"].append(mg.fan(c0, idx[0]))
-    faces["gums"].append(mg.fan(c0 + 1, idx[-1][::-1]))
-    allf = np.concatenate([np.concatenate(f) for f in faces.values()])
-    flip = mg.signed_volume(v, allf) < 0
-    parts = []
-    for mat in ("teeth", "gums"):
-        f = np.concatenate(faces[mat])
-        parts.append(Part(mat, f[:, ::-1] if flip else f))
-    return MeshObject(f"teeth_{which}", "teeth", v, tuple(parts))
-
-
-def _tongue(res: int) -> MeshObject:
-    T = _params()["tongue"]
-    sc = _params()["grid"]["resolution_scale"][res]
-    v, f, _ = mg.uv_sphere(max(6, round(T["n_lat"] * sc)), max(8, round(T["n_lon"] * sc)))
-    v = v[:, [0, 2, 1]] * [1, 1, 1]  # poles on ±y
-    f = f[:, ::-1]  # the axis swap mirrors
-    r = np.asarray(T["r"], float)
-    p = v * r
-    p[:, 1] = np.where(p[:, 1] > 0, p[:, 1] * (1 - 0.35 * (p[:, 0] / r[0]) ** 2), p[:, 1])
-    p += T["c"]
-    if mg.signed_volume(p, f) < 0:
-        f = f[:, ::-1]
-    return MeshObject("tongue", "teeth", p, (Part("tongue", f),))
-
-
-def _brows(res: int) -> MeshObject:
-    B = _params()["brows"]
-    S = _shape()
-    sc = _params()["grid"]["resolution_scale"][res]
-    cl = np.asarray(B["centreline"], float)
-    nu, nv = (max(3, round(k * sc)) for k in B["samples"])
-    knots = np.linspace(0, 1, len(cl))
-    spl_x = PchipInterpolator(knots, cl[:, 0])
-    spl_y = PchipInterpolator(knots, cl[:, 1])
-    u = np.linspace(0, 1, nu + 1)
-    v = np.linspace(-1, 1, nv + 1)
-    U, Vv = np.meshgrid(u, v, indexing="ij")
-    cx, cy = spl_x(U), spl_y(U)
-    dx, dy = spl_x(U, 1), spl_y(U, 1)
-    nrm = np.hypot(dx, dy)
-    w = np.interp(U, knots, B["width"])
-    px = cx - dy / nrm * Vv * w / 2
-    py = cy + dx / nrm * Vv * w / 2
-    org = np.stack([px.ravel(), py.ravel(), np.zeros(px.size)], 1)
-    dirs = np.tile([0.0, 0.0, 1.0], (len(org), 1))
-    r = mg.ray_cast(S.field, org, dirs, 25.0)
-    base = org + dirs * r[:, None]
-    n = S.normal(base)
-    th = np.interp(U, knots, B["thickness"]).ravel()
-    prof = np.sqrt(np.clip(1 - Vv.ravel() ** 2, 0, 1)) ** 0.7
-    hair = 1 + 0.12 * np.sin(2 * np.pi * (U.ravel() * nu * 0.5 + 0.25))
-    h = th * prof * hair - B["sink"] * (1 - prof)
-    pts = base + n * h[:, None]
-    idx = np.arange(len(pts)).reshape(U.shape)
-    f = mg.grid_faces(idx)  # u → +x, v → up: counter-clockwise seen from the front
-    left = pts
-    right = pts * [-1, 1, 1]
-    verts = np.concatenate([left, right])
-    faces = np.concatenate([f, f[:, ::-1] + len(left)])
-    return MeshObject("brows", "face", verts, (Part("brow", faces),))
-
-
-# =============================================================================================
-# the head
-# =============================================================================================
-
-
-def _nearest(V: np.ndarray, cand: np.ndarray, p) -> int:
-    d = np.linalg.norm(V[cand] - np.asarray(p, float), axis=1)
-    return int(cand[np.argmin(d)])
-
-
-def _skin_uvs(S: _Shape, V: np.ndarray, ae: np.ndarray) -> np.ndarray:
-    """Texture coordinates of the skin, shape (N, 2) in [0, 1]: the ray parametrisation the
-    skin is sampled with (azimuth → u, elevation → v, equirectangular around the vertical
-    axis through the head centre), so the only seam runs down the back of the head. Vertices
-    of the pockets behind the openings (not on a ray) use their direction from the centre."""
-    a = np.empty(len(V))
-    e = np.empty(len(V))
-    a[: len(ae)], e[: len(ae)] = ae[:, 0], ae[:, 1]
-    if len(V) > len(ae):
-        pa, pe = S.ae(V[len(ae):])
-        a[len(ae):], e[len(ae):] = pa, pe
-    return np.stack([(a + 180.0) / 360.0, (e + 90.0) / 180.0], 1).astype(np.float32)
-
-
-@functools.lru_cache(maxsize=len(RESOLUTIONS))
-def build_builtin_head(resolution: int = 1) -> Head:
-    """The built-in head at ``resolution`` 0 (coarse), 1 (default, < 25k triangles) or 2 (fine).
-
-    All resolutions sample the same surfaces. Deterministic; cached per resolution.
-    """
-    if resolution not in RESOLUTIONS:
-        raise ParameterError(f"resolution={resolution!r} must be one of {RESOLUTIONS} "
-                             "(0 coarse, 1 default, 2 fine)")
-    Pm = _params()
-    S = _shape()
-    V, F, info = _build_skin(resolution)
-    A, idx = info["A"], info["idx"]
-    col = {k: int(np.argmin(np.abs(A - v))) for k, v in
-           (("mR", -S.a_m), ("mL", S.a_m), ("eRo", -S.a_out), ("eRi", -S.a_in),
-            ("eLi", S.a_in), ("eLo", S.a_out))}
-    jm, je = info["jm"], info["je"]
-
-    # materials on the skin: lips by direction of the face centroid
-    ae = info["ae"]
-    fa = ae[F].mean(1)
-    hu, hl = S.lip_heights(fa[:, 0])
-    ml = S.mouth_line(fa[:, 0])
-    lips = (np.abs(fa[:, 0]) < S.a_m) & (fa[:, 1] < ml + hu + 1e-6) & (fa[:, 1] > ml - hl - 1e-6)
-    parts = {"skin": [F[~lips]], "lips": [F[lips]], "mouth": [], "socket": []}
-
-    # eye sockets
-    ey = Pm["eyes"]
-    verts = [V]
-    nv = len(V)
-    for side, (c0, c1) in ((1, ("eLi", "eLo")), (-1, ("eRo", "eRi"))):
-        loop = _opening_loop(info, col[c0], col[c1], je)
-        centre = np.asarray(ey["centre"], float) * [side, 1, 1]
-        allv = np.concatenate(verts)
-        P, Fs = _eye_socket(allv, loop, centre, resolution, ey)
-        Fs = [f + 0 for f in Fs]
-        verts.append(P)
-        fs = np.concatenate(Fs)
-        fs = mg.orient_like(fs, F)
-        parts["socket"].append(fs)
-        nv += len(P)
-    # mouth pocket
-    loop = _opening_loop(info, col["mR"], col["mL"], jm)
-    allv = np.concatenate(verts)
-    P, Fd = _mouth_pocket(allv, loop, resolution)
-    verts.append(P)
-    pocket = np.concatenate([np.concatenate(fl) for fl in Fd.values()])
-    flip = mg.orient_like(pocket, F) is not pocket
-    for mat, fl in Fd.items():
-        for f in fl:
-            parts[mat].append(f[:, ::-1] if flip else f)
-    Vs = np.concatenate(verts)
-    skin = MeshObject("skin", "face", Vs, tuple(Part(m, np.concatenate(f))
-                                                 for m, f in parts.items() if f),
-                      uvs=_skin_uvs(S, Vs, ae))
-
-    objects = [skin, _brows(resolution), _eyeball(1, resolution), _eyeball(-1, resolution),
-               _teeth("upper", resolution), _teeth("lower", resolution), _tongue(resolution)]
-
-    # ---- landmarks, anchors, regions -------------------------------------------------------
-    lm, regions = _landmarks(Vs, info, col, len(V))
-    lmp = Vs[lm]
-    ey = np.asarray(Pm["eyes"]["centre"], float)
-    anc = Pm["anchors"]
-    anchors = {
-        "mouth_corner_L": Vs[idx[col["mL"], jm]],
-        "mouth_corner_R": Vs[idx[col["mR"], jm]],
-        "eye_L": ey * [1, 1, 1],
-        "eye_R": ey * [-1, 1, 1],
-        "chin": lmp[8],
-        "nose_tip": lmp[30],
-        "brow_L": Vs[regions["brow_mid_L"]],
-        "brow_R": Vs[regions["brow_mid_R"]],
-        "neck_base": np.asarray(anc["neck_base"], float),
-        "neck_pivot": np.asarray(anc["neck_pivot"], float),
-        "jaw_pivot": np.asarray(anc["jaw_pivot"], float),
-    }
-    return Head("builtin", tuple(objects), lm, anchors, landmark_object="skin",
-                description="mimika's built-in procedural head (stylised, made by code)",
-                meta={"resolution": resolution, "regions": regions})
-
-
-def _landmarks(V: np.ndarray, info: dict, col: dict, n_outer: int):
-    """The 68 Multi-PIE landmarks as skin vertex indices, and named vertex sets."""
-    S = _shape()
-    Pm = _params()
-    idx, A = info["idx"], info["A"]
-    jm, je = info["jm"], info["je"]
-    outer = np.arange(n_outer)  # outer skin (no pockets)
-
-    def at(a, row):
-        return int(idx[int(np.argmin(np.abs(A - a))), row])
-
-    lm = np.zeros(68, int)
-    # jaw line, from the subject's right (-x) round the chin to the left
-    guide = np.asarray(Pm["landmark_guides"]["jaw"], float)
-    a, e = S.ae(guide)
-    guide = S.cast(a, e, Pm["r_max"])  # onto the surface
-    for k in range(9):
-        g = guide[k]
-        lm[k] = _nearest(V, outer, g * [-1, 1, 1])
-        lm[16 - k] = _nearest(V, outer, g)
-    # brows: skin under the brow centreline, outer→inner on the right, inner→outer on the left
-    bc = _brow_centre(np.linspace(0, 1, 5))
-    for k in range(5):
-        lm[22 + k] = _nearest(V, outer, bc[k])
-        lm[21 - k] = _nearest(V, outer, bc[k] * [-1, 1, 1])
-    # nose
-    c0 = int(np.argmin(np.abs(A)))
-    colv = idx[c0]
-    top = np.asarray(Pm["landmark_guides"]["nose_bridge_top"], float)
-    lm[27] = _nearest(V, colv, top)
-    tip = int(colv[np.argmax(V[colv, 2])])
-    lm[30] = tip
-    for k, f in ((28, 1 / 3), (29, 2 / 3)):
-        lm[k] = _nearest(V, colv, top + (V[tip] - top) * f)
-    for k, g in zip((31, 32, 33), Pm["landmark_guides"]["nose_base"], strict=True):
-        g = np.asarray(g, float)
-        lm[k] = _nearest(V, outer, g * [-1, 1, 1])
-        lm[66 - k] = _nearest(V, outer, g)  # 35, 34, 33
-    # eyes: corners, upper lid (row je+1) and lower lid (row je) at thirds
-    ai, ao = S.a_in, S.a_out
-    t1, t2 = ao - (ao - ai) / 3, ao - 2 * (ao - ai) / 3  # outer third, inner third
-    lm[36:42] = [idx[col["eRo"], je], at(-t1, je + 1), at(-t2, je + 1), idx[col["eRi"], je],
-                 at(-t2, je), at(-t1, je)]
-    lm[42:48] = [idx[col["eLi"], je], at(t2, je + 1), at(t1, je + 1), idx[col["eLo"], je],
-                 at(t1, je), at(t2, je)]
-    # lips: outer contour on the red-lip border rows, inner contour on the slit edges
-    am = S.a_m
-    ju, jl = info["j_lip1"], info["j_lip0"]
-    lm[48] = idx[col["mR"], jm]
-    lm[54] = idx[col["mL"], jm]
-    lm[49:54] = [at(f * am, ju) for f in (-2 / 3, -1 / 3, 0, 1 / 3, 2 / 3)]
-    lm[55:60] = [at(f * am, jl) for f in (2 / 3, 1 / 3, 0, -1 / 3, -2 / 3)]
-    lm[60] = lm[48]
-    lm[64] = lm[54]
-    lm[61:64] = [at(f * am, jm + 1) for f in (-1 / 2, 0, 1 / 2)]
-    lm[65:68] = [at(f * am, jm) for f in (1 / 2, 0, -1 / 2)]
-
-    in_m, in_e = info["in_mouth"], info["in_eye"]
-    right, left = A < 0, A > 0
-    regions = {
-        "lid_upper_margin_L": idx[in_e & left, je + 1],
-        "lid_lower_margin_L": idx[in_e & left, je],
-        "lid_upper_margin_R": idx[in_e & right, je + 1],
-        "lid_lower_margin_R": idx[in_e & right, je],
-        "eye_corners_L": np.array([idx[col["eLi"], je], idx[col["eLo"], je]]),
-        "eye_corners_R": np.array([idx[col["eRi"], je], idx[col["eRo"], je]]),
-        "lip_upper_inner": idx[in_m, jm + 1],
-        "lip_lower_inner": idx[in_m, jm],
-        "lip_upper_border": idx[np.abs(A) <= am + 1e-9, ju],
-        "lip_lower_border": idx[np.abs(A) <= am + 1e-9, jl],
-        "mouth_corners": np.array([idx[col["mR"], jm], idx[col["mL"], jm]]),
-        "brow_mid_L": _nearest(V, outer, bc[2]),
-        "brow_mid_R": _nearest(V, outer, bc[2] * [-1, 1, 1]),
-        "pockets": np.arange(n_outer, len(V)),
-        "face_patch_grid": idx,
-    }
-    return lm, regions
-
-
-def _brow_centre(u: np.ndarray) -> np.ndarray:
+def brow_centre(u: np.ndarray) -> np.ndarray:
     """Points on the skin under the left brow's centre line at parameters ``u`` in [0, 1]."""
-    B = _params()["brows"]
-    S = _shape()
+    B = params()["brows"]
+    S = shape()
     cl = np.asarray(B["centreline"], float)
     knots = np.linspace(0, 1, len(cl))
     x = PchipInterpolator(knots, cl[:, 0])(u)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
@@ -23,7 +22,7 @@ from mimika.facs import AU_CATALOGUE, base_code, parse_au
 
 log = logging.getLogger(__name__)
 
-__all__ = ["BlendshapeRig", "ShapeSet", "load_ict_rig", "load_table"]
+__all__ = ["BlendshapeRig", "ShapeSet", "load_table"]
 
 _EPS = 1e-5  #: cm; smaller deltas count as "does not move"
 _CHUNK = 128  #: frames per block in deform_batch (bounds temporary memory)
@@ -355,12 +354,3 @@ class BlendshapeRig(Rig):
             if np.any(head_rv[t0:t1]) or np.any(head_tr[t0:t1]):
                 self._apply_head(buf, head_rv[t0:t1], head_tr[t0:t1])
         return {n: out[:, s] for n, s in self._slices.items()}
-
-
-def load_ict_rig(path: str | os.PathLike | None = None, identity=None) -> BlendshapeRig:
-    """The ICT Face Model with the shipped ``ict_aus.json`` table (see :mod:`mimika.face.ict`);
-    ``identity``: an identity mode 0–9 or mode weights (``mimika.face.ict.identity_weights``)."""
-    from mimika.face.ict import load_ict
-
-    head, shapes = load_ict(path, identity)
-    return BlendshapeRig(head, shapes, load_table())

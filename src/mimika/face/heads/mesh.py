@@ -18,7 +18,7 @@ from mimika.face.head import Head, MeshObject, Part
 
 def head_from_obj(path: str | Path) -> Head:
     """Load ``path`` as a one-object head (category face, material skin)."""
-    from mimika.face.builtin import build_builtin_head
+    from mimika.face.heads.builtin import build_builtin_head
     from mimika.io.obj import read_obj
 
     mesh = read_obj(path)

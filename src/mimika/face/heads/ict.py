@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from mimika.errors import DataError, ParameterError
-from mimika.face.blendshape import ShapeSet
 from mimika.face.head import Head, MeshObject, Part
+from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet, load_table
 from mimika.io.atomic import atomic_open
 from mimika.io.obj import read_obj, read_obj_vertices
 
@@ -421,3 +421,10 @@ def load_ict_head(path: str | os.PathLike | None = None, identity: Identity = No
     """The ICT Face Model as a :class:`Head` (objects, 68 landmarks into ``skin``, anchors),
     optionally an ``identity`` (int 0–9 or mode weights, see :func:`identity_weights`)."""
     return build_head(with_identity(load_ict_data(path), identity))
+
+
+def load_ict_rig(path: str | os.PathLike | None = None, identity: Identity = None) -> BlendshapeRig:
+    """The ICT Face Model with the shipped ``ict_aus.json`` table; ``identity``: an identity
+    mode 0–9 or mode weights (:func:`identity_weights`)."""
+    head, shapes = load_ict(path, identity)
+    return BlendshapeRig(head, shapes, load_table())

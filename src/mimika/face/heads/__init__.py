@@ -21,7 +21,7 @@ class HeadInfo:
 
 def list_heads() -> list[HeadInfo]:
     """The named heads and whether they can be loaded here."""
-    from mimika.face.ict import find_ict_dir
+    from mimika.face.heads.ict import find_ict_dir
 
     try:
         ict_dir = str(find_ict_dir())
@@ -38,12 +38,12 @@ def list_heads() -> list[HeadInfo]:
 
 def _field_rig(head: Head, fields: str | Path | None) -> Rig:
     """The FieldRig of ``head``: built-in fields, or a file (fitted files are aligned to the
-    head by their recorded landmarks, see :func:`mimika.face.fit.load_fitted_rig`)."""
+    head by their recorded landmarks, see :func:`mimika.face.fitting.load_fitted_rig`)."""
     if fields is None:
-        from mimika.face.field import load_field_rig
+        from mimika.face.rigs.field import load_field_rig
 
         return load_field_rig(head)
-    from mimika.face.fit import load_fitted_rig
+    from mimika.face.fitting import load_fitted_rig
 
     return load_fitted_rig(head, fields)
 
@@ -57,22 +57,22 @@ def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None 
     an ICT-FaceKit checkout; an ``.obj`` file — a face mesh in mimika's frame (cm, y up,
     facing +z) driven by the built-in fields (AUs are fields over space, so any similar face
     mesh deforms). ``identity`` (ICT heads only): an identity mode 0–9 or a sequence of mode
-    weights (see :func:`mimika.face.ict.identity_weights`).
+    weights (see :func:`mimika.face.heads.ict.identity_weights`).
     """
     s = str(spec)
     is_ict = s == "ict" or Path(s).is_dir()
     if identity is not None and not is_ict:
         raise ParameterError(f"identity applies to the ICT head only, not {s!r}")
     if s == "builtin":
-        from mimika.face.builtin import build_builtin_head
+        from mimika.face.heads.builtin import build_builtin_head
 
         head = build_builtin_head(resolution)
         return head, _field_rig(head, fields)
     if s == "ict" or Path(s).is_dir():
-        from mimika.face.blendshape import load_ict_rig
+        from mimika.face.heads.ict import load_ict_rig
 
         if fields is not None:
-            from mimika.face.ict import load_ict_head
+            from mimika.face.heads.ict import load_ict_head
 
             head = load_ict_head(None if s == "ict" else s, identity)
             return head, _field_rig(head, fields)
@@ -82,7 +82,7 @@ def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None 
     if p.suffix.lower() == ".obj":
         if not p.is_file():
             raise DataError(f"mesh file {p} does not exist")
-        from mimika.face.meshhead import head_from_obj
+        from mimika.face.heads.mesh import head_from_obj
 
         head = head_from_obj(p)
         return head, _field_rig(head, fields)
