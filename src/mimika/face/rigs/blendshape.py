@@ -255,9 +255,14 @@ class BlendshapeRig(Rig):
                 head_t += v * self._head_tr[code]
         if eye_rv.any():
             self._apply_eyes(out[None], eye_rv[None])
-        if head_rv.any() or head_t.any():
-            self._apply_head(out[None], head_rv[None], head_t[None])
+        self._move(out[None], head_rv[None], head_t[None])
         return {n: out[s] for n, s in self._slices.items()}
+
+    def _move(self, buf: np.ndarray, rv: np.ndarray, tr: np.ndarray) -> None:
+        """Head motion, applied last to all objects in place: buf (T, N, 3), head rotation
+        vectors rv (T, 3) and translations tr (T, 3). Rigs with a skeleton override this."""
+        if np.any(rv) or np.any(tr):
+            self._apply_head(buf, rv, tr)
 
     def _apply_eyes(self, buf: np.ndarray, rv: np.ndarray) -> None:
         """In place on buf (T, N, 3): rotate each eyeball by rv (T, 3) about its pivot."""
@@ -351,6 +356,5 @@ class BlendshapeRig(Rig):
                     flat[:, a:b] += d[:, c:c + b - a]
             if np.any(eye_rv[t0:t1]):
                 self._apply_eyes(buf, eye_rv[t0:t1])
-            if np.any(head_rv[t0:t1]) or np.any(head_tr[t0:t1]):
-                self._apply_head(buf, head_rv[t0:t1], head_tr[t0:t1])
+            self._move(buf, head_rv[t0:t1], head_tr[t0:t1])
         return {n: out[:, s] for n, s in self._slices.items()}
