@@ -59,6 +59,7 @@ class Material:
     scatter: tuple[float, float, float] = (1.0, 1.0, 1.0)
     alpha: float = 1.0
     cull: bool = False  #: skip back faces (closed, outward-facing surfaces only)
+    model: str = "standard"  #: shading model: standard, or hair (Kajiya-Kay strands)
 
 
 @functools.cache
@@ -78,6 +79,7 @@ def load_materials() -> dict[str, Material]:
             cull=bool(m.get("cull", False)),
             scatter=srgb_to_linear(m.get("scatter", "#ffffff")),
             alpha=float(m.get("alpha", 1.0)),
+            model=str(m.get("model", "standard")),
         )
     return out
 
@@ -471,6 +473,7 @@ class Renderer:
         prog["u_alpha"].value = m.alpha
         prog["u_textured"].value = tex is not None
         prog["u_alpha_mode"].value = mode
+        prog["u_model"].value = 1 if m.model == "hair" else 0
         # cut-outs and cards are seen from both sides: no darkening of their back faces
         prog["u_backface"].value = BACKFACE if mode == _OPAQUE else 1.0
         if tex is not None:

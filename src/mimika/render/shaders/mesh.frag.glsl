@@ -17,6 +17,8 @@ uniform float u_wrap;       // wrap diffuse (0 = Lambert)
 uniform vec3 u_scatter;     // tint of light wrapped past the terminator (skin: reddish)
 uniform float u_alpha;      // < 1: glass-like, premultiplied (specular stays)
 uniform float u_backface;   // brightness of back faces (cavities seen from outside)
+uniform int u_model;        // 0 standard, 1 hair: Kajiya-Kay highlights, soft silhouettes
+uniform mat4 u_view;        // (shared with the vertex shader) world up for hair strands
 
 #include "lights.glsl"
 uniform float u_exposure;
@@ -60,26 +62,59 @@ float specular(vec3 n, vec3 v, vec3 l) {
     return u_specular * norm * fres * pow(max(dot(n, h), 1e-4), u_shininess) * ndl;
 }
 
+// Hair (Kajiya-Kay): strands run along the surface's projection of world up (root to tip
+// downward); two highlights — a white one shifted toward the root and a broader one tinted
+// by the hair colour toward the tip. ``t`` is not normalised: short where strands are ill
+// defined (the crown), where the standard highlight takes over.
+float strand_spec(vec3 t, vec3 n, vec3 h, float shift, float e) {
+    vec3 ts = normalize(t + shift * n);
+    float th = dot(ts, h);
+    return pow(sqrt(max(1.0 - th * th, 0.0)), e);
+}
+
+vec3 hair_specular(vec3 n, vec3 v, vec3 l, vec3 t) {
+    vec3 h = normalize(l + v);
+    float lit = smoothstep(-0.1, 0.35, dot(n, l));
+    float s1 = strand_spec(t, n, h, -0.15, u_shininess);
+    float s2 = strand_spec(t, n, h, 0.2, 0.25 * u_shininess);
+    return u_specular * lit * (vec3(s1) + 0.7 * s2 * sqrt(base));
+}
+
 void main() {
     base = u_base;
     float a = 1.0;
+    float gloss = 1.0;
+    vec3 n = normalize(v_normal);
+    vec3 v = normalize(-v_pos);
     if (u_textured) {
         vec4 t = texture(u_tex, v_uv);
         base = pow(t.rgb, vec3(2.2));
         a = t.a;
+        if (u_alpha_mode == 0) gloss = a;  // opaque parts: alpha is a gloss map
+        // hair thins out toward its silhouette (strand ends seen edge-on)
+        if (u_model == 1) a *= smoothstep(0.03, 0.45, abs(dot(n, v)));
         if (u_alpha_mode == 1 && a < 0.5) discard;
         if (u_alpha_mode == 3 && (a >= 0.5 || a < 0.02)) discard;
     }
-    vec3 n = normalize(v_normal);
     float facing = 1.0;
     if (!gl_FrontFacing) {
         n = -n;
         facing = u_backface;
     }
-    vec3 v = normalize(-v_pos);
+    vec3 sk, sf;
+    if (u_model == 1) {
+        vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);
+        vec3 t = up - dot(up, n) * n;
+        float defined = smoothstep(0.15, 0.5, length(t));
+        sk = mix(vec3(specular(n, v, u_key_dir)), hair_specular(n, v, u_key_dir, t), defined);
+        sf = mix(vec3(specular(n, v, u_fill_dir)), hair_specular(n, v, u_fill_dir, t), defined);
+    } else {
+        sk = vec3(specular(n, v, u_key_dir));
+        sf = vec3(specular(n, v, u_fill_dir));
+    }
     // key and fill: diffuse + specular; rim: diffuse only (it lights silhouettes)
-    vec3 c = u_key_col * (diffuse(n, u_key_dir) * u_alpha + specular(n, v, u_key_dir))
-           + u_fill_col * (diffuse(n, u_fill_dir) * u_alpha + specular(n, v, u_fill_dir))
+    vec3 c = u_key_col * (diffuse(n, u_key_dir) * u_alpha + gloss * sk)
+           + u_fill_col * (diffuse(n, u_fill_dir) * u_alpha + gloss * sf)
            + u_rim_col * diffuse(n, u_rim_dir) * u_alpha;
     vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha;
     c = (c + ambient) * facing;

@@ -8,7 +8,6 @@ import numpy as np
 from mimika.face.head import Part, Texture
 from mimika.face.makehuman.build import Piece
 from mimika.face.makehuman.character_file import Character
-from mimika.face.makehuman.paint.regions import skin_regions
 
 
 def solid(hex_color: str, alpha: int = 255) -> Texture:
@@ -21,18 +20,25 @@ def solid(hex_color: str, alpha: int = 255) -> Texture:
 def parts_of(piece: Piece, character: Character) -> tuple[Part, ...]:
     """The parts of ``piece`` with their materials and textures."""
     if piece.name == "skin":
+        from mimika.face.makehuman.paint.skin import paint_skin
+
+        sk = paint_skin(piece, character)
+        piece.meta.setdefault("uv_layout", piece.uvs)
+        piece.uvs = sk.uvs
+        head, body = Texture(sk.head, "skin"), Texture(sk.body, "skin_body")
         tris = piece.parts["skin"]
-        region = skin_regions(piece, tris)
-        tex = solid(character.skin)
-        return tuple(Part(mat, tris[region == k], tex) for k, mat in
-                     enumerate(("skin", "lips", "skin_body")) if np.any(region == k))
+        return tuple(Part(mat, tris[sk.region == k], tex) for k, (mat, tex) in
+                     enumerate((("skin", head), ("lips", head), ("skin_body", body)))
+                     if np.any(sk.region == k))
     out = []
     for mat, faces in piece.parts.items():
         tex, mode = None, "opaque"
         if mat == "iris":
             tex = solid(character.eyes)
         elif mat == "hair":
-            tex = solid(character.hair_color)
+            from mimika.face.makehuman.paint.hair import paint_hair
+
+            tex, mode = Texture(paint_hair(piece, character), "hair"), "blend"
         elif mat in ("brow", "lash"):
             tex = solid(character.hair_color if mat == "brow" else "#1a1410")
         out.append(Part(mat, faces, tex, mode))

@@ -22,9 +22,14 @@ def uv_mask(name: str) -> np.ndarray:
         return np.asarray(im.convert("L"), np.float32) / 255.0
 
 
-def sample(mask: np.ndarray, uv: np.ndarray) -> np.ndarray:
-    """Nearest-texel lookup of ``mask`` at ``uv`` (N, 2)."""
+def sample(mask: np.ndarray, uv: np.ndarray, bilinear: bool = False) -> np.ndarray:
+    """Lookup of ``mask`` at ``uv`` (N, 2): nearest texel, or bilinear."""
     h, w = mask.shape
+    if bilinear:
+        from scipy import ndimage
+
+        coords = np.stack([(1.0 - uv[:, 1]) * h - 0.5, uv[:, 0] * w - 0.5])
+        return ndimage.map_coordinates(mask, coords, order=1, mode="nearest")
     x = np.clip((uv[:, 0] * w).astype(int), 0, w - 1)
     y = np.clip(((1.0 - uv[:, 1]) * h).astype(int), 0, h - 1)
     return mask[y, x]

@@ -1,0 +1,217 @@
+"""Hair strands with alpha for the MakeHuman hair proxies (shells and cards).
+
+Strands are laid out analytically, not by tracing: on the big shells a strand is a line of
+constant azimuth about a *pole* (the crown, or a ponytail's band) — so strands converge at the
+crown, fall straight down long hair and run on across UV seams; on small cards (locks, tufts,
+which often share texture space) strands run straight along the card's own root→tip direction
+in texture space. Each texel gets a strand coordinate (cm across the strands) and an along
+coordinate; clumps, strands and fibres are 1-D noise tables over the across coordinate.
+Strand tips thin out near the mesh's open border (distance in cm, each strand ending at its own
+random length), which softens the hairline and the ends; roots (near the scalp) are darker.
+Curly styles (``curl`` > 0) use contour lines of 3-D noise instead.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from importlib import resources
+
+import numpy as np
+from scipy import ndimage
+
+from mimika.face.makehuman.build import Piece
+from mimika.face.makehuman.character_file import Character
+from mimika.face.makehuman.paint import color
+from mimika.face.makehuman.paint.noise import fbm3, seed_of, smoothstep, value3
+from mimika.face.makehuman.paint.raster import Atlas, rasterize
+from mimika.face.makehuman.paint.regions import uv_islands
+from mimika.face.makehuman.paint.surface import boundary_edges, face_jacobians
+
+CM = 10.0
+#: islands smaller than this (cm²) are cards: strands straight in texture space
+CARD_CM2 = 250.0
+
+
+@functools.cache
+def styles() -> dict[str, dict]:
+    text = resources.files("mimika.face.makehuman.paint").joinpath("data", "hair.json")
+    return {k: v for k, v in json.loads(text.read_text("utf-8")).items()
+            if not k.startswith("_")}
+
+
+def style(name: str) -> dict:
+    """Settings of hair style ``name`` (a default for styles the table lacks)."""
+    return styles().get(name, styles()["short02"])
+
+
+class _Table:
+    """A periodic 1-D random table read with linear interpolation."""
+
+    def __init__(self, n: int, seed: int) -> None:
+        self.v = np.random.default_rng(seed).random(n).astype(np.float32)
+        self.n = n
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        i = np.floor(x)
+        f = (x - i).astype(np.float32)
+        i = i.astype(np.int64) % self.n
+        return self.v[i] * (1 - f) + self.v[(i + 1) % self.n] * f
+
+
+def _border_distance(at: Atlas, uv: np.ndarray, tris: np.ndarray, weld) -> np.ndarray:
+    """Per covered texel: distance in texels to the mesh's open border (UV seams excluded)."""
+    e = boundary_edges(tris, weld)
+    px = np.column_stack([uv[:, 0] * at.w, (1 - uv[:, 1]) * at.h])
+    a, b = px[e[:, 0]], px[e[:, 1]]
+    n = np.ceil(np.linalg.norm(b - a, axis=1) * 2).astype(np.int64) + 1
+    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n).clip(1)
+    pts = np.repeat(a, n, 0) + t[:, None] * np.repeat(b - a, n, 0)
+    x = np.clip(pts[:, 0].astype(np.int64), 0, at.w - 1)
+    y = np.clip(pts[:, 1].astype(np.int64), 0, at.h - 1)
+    mask = np.ones((at.h, at.w), bool)
+    mask[y, x] = False
+    return ndimage.distance_transform_edt(mask).ravel()[at.texels].astype(np.float32)
+
+
+def _frame(axis) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    a = np.asarray(axis, np.float64)
+    a /= np.linalg.norm(a)
+    e1 = np.cross(a, [0.0, 0.0, 1.0]) if abs(a[2]) < 0.9 else np.cross(a, [1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    return a, e1, np.cross(a, e1)
+
+
+def _pole_coords(p: np.ndarray, pole: np.ndarray, axis) -> tuple[np.ndarray, np.ndarray]:
+    """Azimuth (radians) about the pole's axis and distance from the pole (cm)."""
+    _, e1, e2 = _frame(axis)
+    d = p - pole
+    return np.arctan2(d @ e2, d @ e1), np.linalg.norm(d, axis=1)
+
+
+def _poles(st: dict, pos: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """(pole point cm, axis, applies below y) for the style on this hair mesh."""
+    top = pos[np.argmax(pos[:, 1])]
+    ref = np.array([0.0, top[1], top[2]])
+    out = [(ref + st["pole"], np.asarray(st["axis"], float), np.inf)]
+    if "tail" in st:
+        t = st["tail"]
+        out.append((ref + t["pole"], np.asarray(t["axis"], float), top[1] - t["below_cm"]))
+    return out
+
+
+def paint_hair(piece: Piece, character: Character) -> np.ndarray:
+    """RGBA (sRGB, straight alpha) strand texture for the hair piece."""
+    st = style(character.hair or "")
+    size = int(st["size"])
+    uv = piece.uvs
+    tris = np.concatenate(list(piece.parts.values()))
+    pos = piece.vertices.astype(np.float64) * CM
+    at = rasterize(uv, tris, (size, size))
+    fid = at.faces_at()
+    p = at.at(pos)
+
+    # texture scale (cm per texel) and flow of every triangle
+    jac = face_jacobians(pos, uv, tris)  # (F, 3, 2) cm per UV unit
+    area3 = np.linalg.norm(np.cross(jac[:, :, 0], jac[:, :, 1]), axis=1)
+    cm_tex = (np.sqrt(area3) / size).astype(np.float32)
+    tsz = cm_tex[fid]
+    dist = _border_distance(at, uv, tris, piece.weld) * tsz
+
+    seed = seed_of("hair", character.hair, character.hair_color, character.name)
+    poles = _poles(st, pos)
+    across = np.zeros(len(p), np.float32)  # cm across strands (at 10 cm from the pole)
+    n_around = max(int(2 * np.pi * 10.0 / st["strand_cm"]), 64)
+    for pole, axis, below in poles:
+        sel = p[:, 1] < below
+        phi, _ = _pole_coords(p[sel], pole, axis)
+        across[sel] = phi / (2 * np.pi) * n_around * st["strand_cm"]
+    # the pole's strands converge: spacing scales with the distance from the pole's axis
+    a0, *_ = _frame(poles[0][1])
+    rad = np.linalg.norm(np.cross(p - poles[0][0], a0), axis=1).astype(np.float32)
+    scale = np.clip(rad / 10.0, 0.05, None)
+
+    # cards: straight strands along the island's mean root→tip direction in texture space
+    lab = uv_islands(tris, len(uv))[tris[:, 0]]
+    uvarea = np.abs(np.linalg.det(np.stack([uv[tris[:, 1]] - uv[tris[:, 0]],
+                                            uv[tris[:, 2]] - uv[tris[:, 0]]], 1)))
+    isl_cm2 = np.bincount(lab, area3 * uvarea * 0.5, minlength=lab.max() + 1)
+    card_face = isl_cm2[lab] < CARD_CM2
+    card = card_face[fid]
+    if card.any():
+        cen = pos[tris].mean(1)
+        flow3 = cen - poles[0][0]
+        for *_, below in poles[1:]:
+            s = cen[:, 1] < below
+            flow3[s] = [0.0, -1.0, 0.0]
+        flow_uv = np.einsum("fij,fi->fj", np.linalg.pinv(jac), flow3)  # (F, 2)
+        w = area3 * uvarea
+        mean = np.stack([np.bincount(lab, w * flow_uv[:, k] / np.maximum(
+            np.linalg.norm(flow_uv, axis=1), 1e-12)) for k in (0, 1)], 1)
+        d = mean / np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-12)
+        t = at.texels
+        tx = np.column_stack([t % size + 0.5, size - (t // size + 0.5)])  # texel, v up
+        dl = d[lab[fid]]
+        q = (tx[:, 0] * -dl[:, 1] + tx[:, 1] * dl[:, 0]) * tsz  # cm across
+        across[card] = q[card]
+        scale[card] = 1.0
+
+    wave = st["wave_cm"] * fbm3(p, 3.0, seed + 1, octaves=2) / np.maximum(scale, 0.3)
+    qn = across + wave * 0.5
+
+    def octave(spacing: float, k: int) -> np.ndarray:
+        x = qn / np.float32(spacing)
+        v = _Table(max(round(n_around * st["strand_cm"] / spacing), 16), seed + k)(x)
+        # fade an octave out where its strands get narrower than ~2 texels (aliasing)
+        keep = smoothstep(1.0, 2.5, spacing * scale / np.maximum(tsz, 1e-6))
+        return 0.5 + (v - 0.5) * keep
+
+    if st.get("curl", 0) > 0:
+        cs = float(st["curl"])
+        v1 = fbm3(p, cs, seed + 3, octaves=2)
+        v2 = fbm3(p, cs * 0.7, seed + 4, octaves=2)
+        strand = np.exp(-np.sin(np.pi * 4 * v1) ** 2 / 0.08) * 0.6 + \
+            np.exp(-np.sin(np.pi * 4 * v2) ** 2 / 0.08) * 0.4
+        clump = value3(p, cs * 2.5, seed + 5)
+        fibre = value3(p, cs * 0.3, seed + 6, order=1)
+        length = value3(p, cs * 0.5, seed + 7, order=1)
+    else:
+        clump = octave(st["clump_cm"], 11)
+        strand = octave(st["strand_cm"] * 3, 12)
+        fibre = octave(st["strand_cm"], 13)
+        length = 0.7 * octave(st["strand_cm"] * 1.5, 14) + 0.3 * octave(st["clump_cm"], 15)
+
+    # alpha: 1 inside; within fade_cm of the border each strand ends at its own length
+    fade = float(st["fade_cm"])
+    lo = length * fade * 1.2 - 0.1 * fade
+    alpha = smoothstep(0.0, 1.0, (dist - lo) / (0.25 * fade))
+    edge = smoothstep(0.0, fade, dist)
+    alpha = alpha * (1.0 - (1.0 - edge) * (1.0 - fibre) * 0.7)
+
+    # colour: clump, strand and fibre tones; darker roots near the scalp; lighter tips
+    base = color.hex_linear(character.hair_color)
+    tone = 1.0 + 0.35 * (clump - 0.5) + 0.3 * (strand - 0.5) + 0.25 * (fibre - 0.5)
+    h = at.at(np.linalg.norm(piece.meta.get("offsets", np.zeros_like(pos)), axis=1) * CM)
+    root = 1.0 - smoothstep(0.15, 1.2, h)
+    tone = tone * (1.0 - st["root_dark"] * root) * (1.0 + 0.12 * (1.0 - edge))
+    c = base[None, :] * tone[:, None]
+    c = _grey_strands(c, base, strand, fibre, character.hair_color)
+    return at.image(color.rgba8(c, alpha))
+
+
+def _grey_strands(c, base, strand, fibre, hex_color: str) -> np.ndarray:
+    """Greying hair: a share of white strands among darker ones (mean tone kept)."""
+    s = color.to_srgb8(base).astype(np.float32) / 255.0
+    sat = (s.max() - s.min()) / max(float(s.max()), 1e-6)
+    grey = float(smoothstep(0.3, 0.15, np.float32(sat)) * smoothstep(0.2, 0.35,
+                                                                      np.float32(s.max())))
+    if grey <= 0:
+        return c
+    white = smoothstep(0.5, 0.75, 0.3 * strand + 0.7 * fibre)
+    lum = float(color.luminance(base))
+    share = 0.3  # white strands
+    light = np.full(3, min(3.0 * lum, 0.5), np.float32)
+    dark = np.maximum(base - share * light, 0.2 * base) / (1 - share)
+    mixed = dark[None, :] * (1 - white[:, None]) + light[None, :] * white[:, None]
+    mixed *= (c / np.maximum(base, 1e-6)).mean(1, keepdims=True)
+    return c * (1 - grey) + mixed * grey

@@ -1,0 +1,302 @@
+"""Skin paint: albedo (RGB) and gloss (alpha) over the hm08 skin.
+
+The head island (face, scalp, ears, neck) gets its own atlas, ``HEAD_SIZE`` texels, cropped
+from the UV layout at a uniform scale (≈ 2 950 texels per UV unit, the density of a 2 950²
+full-layout map, ≈ 0.25 mm per texel on the face) — the head vertices' UVs are remapped into
+it. The rest of the body keeps the original layout at ``BODY_SIZE`` (hands, arms, chest in a
+neckline are seen small). Everything is computed per texel from bind-pose positions (cm) and
+the 68 landmarks, so regions follow any phenotype and patterns are continuous across seams.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from dataclasses import dataclass
+from importlib import resources
+
+import numpy as np
+
+from mimika.face.makehuman.build import Piece, asset_path
+from mimika.face.makehuman.character_file import Character
+from mimika.face.makehuman.paint import color
+from mimika.face.makehuman.paint.noise import fbm3, seed_of, smoothstep, value3
+from mimika.face.makehuman.paint.raster import rasterize
+from mimika.face.makehuman.paint.regions import sample, skin_regions, uv_mask
+from mimika.face.makehuman.paint.surface import adjacency, cavity, diffuse, smooth_normals, welded
+from mimika.face.makehuman.proxy import read_mhclo
+
+HEAD_SIZE = (1024, 2048)
+BODY_SIZE = (1024, 1024)
+#: texels left around the head island in its atlas
+PAD = 6
+#: base units (dm) → cm
+CM = 10.0
+
+
+@dataclass(frozen=True)
+class SkinPaint:
+    """The painted skin: per-triangle region (0 head, 1 lips, 2 body), the UVs the textures
+    use (head vertices remapped into the head atlas), and the two RGBA images."""
+
+    region: np.ndarray
+    uvs: np.ndarray
+    head: np.ndarray
+    body: np.ndarray
+
+
+def landmarks(piece: Piece) -> np.ndarray:
+    """The 68 landmarks (68, 3) in cm at the piece's bind pose."""
+    text = resources.files("mimika.face.makehuman").joinpath("data", "hm08_landmarks.json")
+    ids = json.loads(text.read_text("utf-8"))
+    first: dict[int, int] = {}
+    for i, b in enumerate(piece.weld.tolist()):
+        first.setdefault(b, i)
+    return piece.vertices[[first[int(b)] for b in ids]].astype(np.float64) * CM
+
+
+def head_uvs(uv: np.ndarray, verts: np.ndarray) -> np.ndarray:
+    """UVs of ``verts`` cropped into the head atlas (uniform scale, centred, PAD texels)."""
+    w, h = HEAD_SIZE
+    lo, hi = uv[verts].min(0), uv[verts].max(0)
+    span = np.maximum(hi - lo, 1e-6)
+    s = min((w - 2 * PAD) / span[0], (h - 2 * PAD) / span[1])  # texels per UV unit
+    off = (np.array([w, h]) - span * s) / 2
+    out = uv.copy()
+    out[verts] = ((uv[verts] - lo) * s + off) / np.array([w, h])
+    return out.astype(np.float32)
+
+
+def _scalp_cover(piece: Piece, character: Character, avg, key, m) -> np.ndarray:
+    """Per welded vertex: 1 under the hair (its ``.mhclo`` binds to these base vertices),
+    shrunk a little from the hairline and softened."""
+    if not character.hair:
+        return np.zeros(m)
+    refs = np.unique(read_mhclo(asset_path("hair", character.hair)).refs)
+    cov = np.zeros(m)
+    cov[key] = np.isin(piece.weld, refs)
+    for _ in range(2):  # erode: a vertex stays covered only if its neighbours are
+        cov = np.minimum(cov, (avg @ cov > 0.99).astype(float))
+    return diffuse(cov, avg, 6)
+
+
+class _Face:
+    """Region weights of the face from the landmarks, at points ``p`` (T, 3) in cm."""
+
+    def __init__(self, lm: np.ndarray) -> None:
+        self.lm = lm
+        self.eye_y = lm[36:48, 1].mean()
+        self.brow_y = lm[17:27, 1].mean()
+        self.chin = lm[8]
+        self.mouth_y = lm[[48, 54], 1].mean()
+        self.ear_z = lm[[0, 16], 2].mean()
+
+    def blob(self, p: np.ndarray, centres: np.ndarray, r: float) -> np.ndarray:
+        d2 = np.min([((p - c) ** 2).sum(1) for c in np.atleast_2d(centres)], axis=0)
+        return np.exp(-d2 / (2 * r * r)).astype(np.float32)
+
+    def cheeks(self, p):
+        lm = self.lm
+        c = [0.35 * lm[k] + 0.35 * lm[n] + 0.3 * lm[e] + [0, -0.3, 0.4]
+             for k, n, e in ((2, 31, 41), (14, 35, 46))]
+        return self.blob(p, np.array(c), 1.9)
+
+    def nose(self, p):
+        lm = self.lm
+        return np.maximum(self.blob(p, lm[30], 0.9), 0.8 * self.blob(p, lm[[31, 35]], 0.6))
+
+    def undereye(self, p):
+        lm = self.lm
+        pts = lm[[40, 41, 46, 47]] + np.array([0, -0.55, -0.1])
+        return self.blob(p, pts, 0.55)
+
+    def brows(self, p):
+        lm = self.lm
+        a = np.concatenate([_polyline(lm[17:22], 4), _polyline(lm[22:27], 4)])
+        return self.blob(p, a + np.array([0, -0.05, -0.2]), 0.32)
+
+    def front(self, p):
+        """1 in front of the ears, 0 behind."""
+        return smoothstep(self.ear_z - 0.5, self.ear_z + 1.5, p[:, 2])
+
+    def forehead(self, p):
+        y = p[:, 1]
+        return smoothstep(self.brow_y + 0.2, self.brow_y + 1.4, y) * self.front(p)
+
+    def tzone(self, p):
+        lm = self.lm
+        bridge = smoothstep(1.3, 0.5, np.abs(p[:, 0])) * smoothstep(lm[30, 1] - 0.5,
+                                                                   lm[30, 1] + 0.5, p[:, 1]) \
+            * smoothstep(self.brow_y + 1.0, self.brow_y, p[:, 1]) * self.front(p)
+        chin = self.blob(p, self.chin + np.array([0, 1.0, 0.3]), 1.3)
+        return np.maximum(np.maximum(self.forehead(p) * smoothstep(5.5, 2.0, np.abs(p[:, 0])),
+                                     bridge), chin)
+
+    def beard(self, p):
+        """Where a beard grows: below a line from the sideburns over the cheeks to the nose,
+        down under the jaw onto the upper neck, in front of the ears."""
+        lm = self.lm
+        ax = np.abs(p[:, 0])
+        xs = [0.0, abs(lm[31, 0]) + 0.2, abs(lm[48, 0]) + 1.0, abs(lm[3, 0]),
+              abs(lm[0, 0]) + 0.3, abs(lm[0, 0]) + 2.0]
+        ys = [lm[33, 1] - 0.15, lm[31, 1] - 0.35, lm[31, 1] - 1.0, lm[2, 1] + 0.2,
+              lm[0, 1] + 0.8, lm[0, 1] + 0.8]
+        top = np.interp(ax, xs, ys)
+        below = smoothstep(0.35, -0.35, p[:, 1] - top)
+        neck = smoothstep(self.chin[1] - 4.8, self.chin[1] - 2.6, p[:, 1])
+        side = smoothstep(self.ear_z - 1.2, self.ear_z + 0.6, p[:, 2])
+        return below * neck * side
+
+
+def _polyline(pts: np.ndarray, n: int) -> np.ndarray:
+    """``n`` points per segment along a polyline."""
+    t = np.linspace(0, 1, n, endpoint=False)[:, None]
+    seg = [a + t * (b - a) for a, b in itertools.pairwise(pts)]
+    return np.concatenate([*seg, pts[-1:]])
+
+
+def _phenotype(character: Character) -> dict[str, float]:
+    ph = character.phenotype
+    origin = ph.get("origin") or {}
+    tot = sum(origin.values()) or 1.0
+    return {"male": float(smoothstep(0.35, 0.9, np.float32(ph.get("gender", 0.5)))),
+            "age": float(ph.get("age", 25.0)),
+            "caucasian": float(origin.get("caucasian", 1.0 if not origin else 0.0)) / tot}
+
+
+def paint_skin(piece: Piece, character: Character) -> SkinPaint:
+    """Albedo + gloss of the skin piece (bind-pose positions, original UVs)."""
+    uv0 = piece.meta.get("uv_layout", piece.uvs)
+    tris = piece.parts["skin"]
+    src = Piece(piece.name, piece.category, piece.vertices, piece.parts, uv0, piece.binding,
+                piece.weld)
+    region = skin_regions(src, tris)
+    head_v = np.unique(tris[region < 2])
+    uvs = head_uvs(uv0, head_v)
+
+    pos = piece.vertices.astype(np.float64) * CM
+    nrm = smooth_normals(pos, tris, piece.weld)
+    key, m = welded(len(pos), piece.weld)
+    avg = adjacency(tris, key, m)
+    cav = diffuse(cavity(pos, nrm, avg, key, m), avg, 2)[key]
+    cover = _scalp_cover(piece, character, avg, key, m)[key]
+    lm = landmarks(piece)
+    seed = seed_of("skin", character.name, character.skin, sorted(character.phenotype.items()))
+    base = color.hex_linear(character.skin)
+    hair = color.hex_linear(character.hair_color)
+    ph = _phenotype(character)
+
+    head = _paint_head(rasterize(uvs, tris[region < 2], HEAD_SIZE), pos, uv0, cav, cover, lm,
+                       base, hair, ph, seed)
+    body = _paint_body(rasterize(uv0, tris[region == 2], BODY_SIZE), pos, uv0, base, seed)
+    return SkinPaint(region, uvs, head, body)
+
+
+def _skin_noise(p: np.ndarray, c: np.ndarray, coarse: np.ndarray, seed: int,
+                light: float) -> tuple:
+    """Mottling, blotches and pores on colours ``c`` (T, 3) at points ``p`` (cm); ``coarse``
+    (T, 2): the per-vertex large-scale mottling and blotch fields. Returns the colours and the
+    pore field (for the gloss)."""
+    fine = value3(p, 0.3, seed + 10, order=1) - 0.5
+    c = c * (1.0 + 0.05 * coarse[:, 0] + 0.05 * fine)[:, None]
+    c = color.tint(c, (0.10 + 0.12 * light) * coarse[:, 1], (1.0, 0.82, 0.82))
+    pores = smoothstep(0.56, 0.8, value3(p, 0.045, seed + 30, order=1))
+    c = c * (1.0 - 0.05 * pores)[:, None]
+    return c, pores
+
+
+def _coarse(pos: np.ndarray, seed: int) -> np.ndarray:
+    """Per-vertex large-scale noise (N, 2): mottling (zero mean) and red blotches (≥ 0)."""
+    return np.stack([fbm3(pos, 1.4, seed, octaves=2),
+                     np.clip(fbm3(pos, 0.8, seed + 20, octaves=2), 0, None)], 1)
+
+
+#: per-vertex region fields of the head, in this order
+_FIELDS = ("cheeks", "nose", "undereye", "forehead", "tzone", "brows", "beard", "neck",
+           "cav", "cover", "mott", "blotch")
+
+
+def _head_fields(pos, cav, cover, f: _Face, seed: int) -> np.ndarray:
+    """(N, len(_FIELDS)) per-vertex fields (smooth at the mesh's ~4 mm edge length)."""
+    neck = smoothstep(f.chin[1] - 1.0, f.chin[1] - 5.0, pos[:, 1])
+    return np.column_stack([f.cheeks(pos), f.nose(pos), f.undereye(pos), f.forehead(pos),
+                            f.tzone(pos), f.brows(pos), f.beard(pos), neck,
+                            np.clip(cav * 3.0, -1.0, 1.0), np.clip(cover, 0, 1),
+                            _coarse(pos, seed)]).astype(np.float32)
+
+
+def _paint_head(at, pos, uv0, cav, cover, lm, base, hair, ph, seed) -> np.ndarray:
+    f = _Face(lm)
+    v = dict(zip(_FIELDS, at.at(_head_fields(pos, cav, cover, f, seed)).T, strict=True))
+    p = at.at(pos)
+    u0 = at.at(uv0)
+    light = float(np.clip((color.luminance(base) - 0.04) / 0.4, 0.0, 1.0))  # fair ↔ dark
+    red = 0.45 + 0.55 * light  # redness shows less through dark skin
+
+    c = np.tile(base, (len(p), 1))
+    lips = sample(uv_mask("lips"), u0, bilinear=True)
+    lids = sample(uv_mask("eyelids"), u0, bilinear=True)
+    ears = sample(uv_mask("ears"), u0, bilinear=True)
+    mouth = sample(uv_mask("inside-mouth"), u0, bilinear=True)
+    cheeks, nose, tz = v["cheeks"], v["nose"], v["tzone"]
+
+    c = color.tint(c, 0.55 * red * cheeks, (1.0, 0.80, 0.80))
+    c = color.tint(c, 0.6 * red * nose, (1.0, 0.80, 0.78))
+    c = color.tint(c, 0.55 * red * ears, (0.97, 0.78, 0.76))
+    c = color.tint(c, 0.7 * lids, (0.9, 0.82, 0.86))
+    c = color.tint(c, 0.6 * v["undereye"], (0.9, 0.86, 0.92))
+    c = color.tint(c, 0.6 * v["forehead"], (1.03, 1.01, 0.93))
+    c = color.tint(c, 0.5 * v["neck"], (1.01, 1.0, 0.94))
+    c, pores = _skin_noise(p, c, np.column_stack([v["mott"], v["blotch"]]), seed, light)
+
+    # freckles (fair, European skin), more with age as age spots
+    if light > 0.3:
+        fr = smoothstep(0.74, 0.82, value3(p, 0.11, seed + 40, order=1))
+        where = np.maximum(cheeks, nose) + 0.3 * v["forehead"]
+        amount = 0.25 * ph["caucasian"] * light * (1.0 + ph["age"] / 60)
+        c = color.tint(c, amount * fr * where, (0.88, 0.78, 0.70))
+
+    # creases and hollows a little darker and redder (light scattered inside)
+    cv = v["cav"]
+    c = color.tint(c, np.clip(cv, 0, 1) * 0.5, (0.85, 0.72, 0.72))
+    c = c * (1.0 - 0.05 * np.clip(-cv, 0, 1))[:, None]  # ridges very slightly lighter
+
+    # lips: a darker, redder version of the skin (purplish on dark skin), fine vertical lines
+    lip = base * np.array([0.95, 0.58, 0.60]) * (0.78 + 0.1 * light)
+    lip = lip * (1 - light) * np.array([0.85, 0.85, 1.0]) + lip * light
+    lines = value3(p / np.array([0.06, 0.7, 0.06]), 1.0, seed + 50, order=1)
+    lipc = lip[None, :] * (0.93 + 0.14 * lines)[:, None]
+    c = color.mix(c, lipc, lips * 0.92)
+    c = color.mix(c, np.array([0.16, 0.035, 0.03]) * (0.4 + 0.6 * light), mouth)
+
+    # brows: skin under them a little darker (hair roots); scalp tinted by the hair
+    c = color.mix(c, c * 0.55 + 0.45 * hair, 0.45 * v["brows"])
+    scalp = v["cover"]
+    c = color.mix(c, 0.7 * hair + 0.3 * c * 0.6, 0.9 * scalp)
+
+    # beard shadow: stubble dots over a bluish shadow, strength by sex and age
+    g_beard = ph["male"] * (0.55 + 0.45 * smoothstep(18.0, 45.0, np.float32(ph["age"])))
+    beard = v["beard"] * (1.0 - smoothstep(0.15, 0.5, lips)) * g_beard
+    if g_beard > 0:
+        dots = smoothstep(0.45, 0.75, value3(p, 0.035, seed + 60, order=1))
+        stubble = 0.55 * hair + 0.45 * c * np.array([0.75, 0.8, 0.9])
+        c = color.mix(c, stubble, beard * (0.30 + 0.35 * dots) * (0.5 + 0.5 * light))
+
+    # gloss: T-zone and lips shine, beard and scalp are matte; pores break highlights up
+    g = 0.5 + 0.32 * tz + 0.1 * nose - 0.08 * cheeks
+    g = g * (1 - lips) + lips * (0.75 + 0.25 * lines)
+    g = g + 0.2 * lids * (1 - lips) - 0.3 * beard - 0.35 * scalp - 0.1 * v["neck"]
+    g = g * (0.78 + 0.22 * (1.0 - pores)) * (0.9 + 0.2 * (v["mott"] * 0.5))
+    g = g * (1 - 0.5 * mouth)
+    return at.image(color.rgba8(c, np.clip(g, 0.05, 1.0)))
+
+
+def _paint_body(at, pos, uv0, base, seed) -> np.ndarray:
+    p = at.at(pos)
+    light = float(np.clip((color.luminance(base) - 0.04) / 0.4, 0.0, 1.0))
+    c = np.tile(base * np.array([1.0, 1.0, 1.02]), (len(p), 1))
+    c, pores = _skin_noise(p, c, at.at(_coarse(pos, seed)), seed, light)
+    nails = sample(uv_mask("fingernails"), at.at(uv0), bilinear=True)
+    c = color.mix(c, c * 0.7 + 0.3 * np.array([0.8, 0.6, 0.6]), nails)
+    g = 0.55 * (0.8 + 0.2 * (1 - pores)) + 0.4 * nails
+    return at.image(color.rgba8(c, g))
