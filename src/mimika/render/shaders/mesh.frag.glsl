@@ -72,12 +72,14 @@ float strand_spec(vec3 t, vec3 n, vec3 h, float shift, float e) {
     return pow(sqrt(max(1.0 - th * th, 0.0)), e);
 }
 
+float strand_gloss = 1.0;  // strand brightness against the texture's mean (its last mip)
+
 vec3 hair_specular(vec3 n, vec3 v, vec3 l, vec3 t) {
     vec3 h = normalize(l + v);
-    float lit = smoothstep(-0.1, 0.35, dot(n, l));
-    float s1 = strand_spec(t, n, h, -0.15, u_shininess);
-    float s2 = strand_spec(t, n, h, 0.2, 0.25 * u_shininess);
-    return u_specular * lit * (vec3(s1) + 0.7 * s2 * sqrt(base));
+    float lit = smoothstep(0.0, 0.5, dot(n, l));
+    float s1 = strand_spec(t, n, h, -0.1, u_shininess);
+    float s2 = strand_spec(t, n, h, 0.15, 0.3 * u_shininess);
+    return u_specular * lit * strand_gloss * (vec3(s1) + 0.8 * s2 * sqrt(base));
 }
 
 void main() {
@@ -91,8 +93,14 @@ void main() {
         base = pow(t.rgb, vec3(2.2));
         a = t.a;
         if (u_alpha_mode == 0) gloss = a;  // opaque parts: alpha is a gloss map
-        // hair thins out toward its silhouette (strand ends seen edge-on)
-        if (u_model == 1) a *= smoothstep(0.03, 0.45, abs(dot(n, v)));
+        if (u_model == 1) {
+            // hair thins out toward its silhouette (strand ends seen edge-on); highlights
+            // follow the strands (brighter strands shine more)
+            a *= smoothstep(0.03, 0.45, abs(dot(n, v)));
+            vec3 mean = textureLod(u_tex, v_uv, 16.0).rgb;
+            float ratio = dot(t.rgb, vec3(0.3, 0.5, 0.2)) / max(dot(mean, vec3(0.3, 0.5, 0.2)), 0.02);
+            strand_gloss = clamp(ratio, 0.2, 2.0);
+        }
         if (u_alpha_mode == 1 && a < 0.5) discard;
         if (u_alpha_mode == 3 && (a >= 0.5 || a < 0.02)) discard;
     }

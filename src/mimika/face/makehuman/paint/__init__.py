@@ -8,6 +8,7 @@ import numpy as np
 from mimika.face.head import Part, Texture
 from mimika.face.makehuman.build import Piece
 from mimika.face.makehuman.character_file import Character
+from mimika.face.makehuman.paint.noise import seed_of
 
 
 def solid(hex_color: str, alpha: int = 255) -> Texture:
@@ -33,13 +34,26 @@ def parts_of(piece: Piece, character: Character) -> tuple[Part, ...]:
     out = []
     for mat, faces in piece.parts.items():
         tex, mode = None, "opaque"
-        if mat == "iris":
-            tex = solid(character.eyes)
+        if mat in ("iris", "sclera"):
+            from mimika.face.makehuman.paint.eyes import paint_iris, paint_sclera
+
+            seed = seed_of("eye", character.name, piece.name)
+            tex = Texture(paint_iris(character.eyes, seed) if mat == "iris"
+                          else paint_sclera(seed), mat)
         elif mat == "hair":
             from mimika.face.makehuman.paint.hair import paint_hair
 
             tex, mode = Texture(paint_hair(piece, character), "hair"), "blend"
         elif mat in ("brow", "lash"):
-            tex = solid(character.hair_color if mat == "brow" else "#1a1410")
+            from mimika.face.makehuman.paint.strokes import paint_strokes
+
+            tex, mode = Texture(paint_strokes(piece, character, mat), mat), "blend"
+            mat = "eyebrow" if mat == "brow" else "eyelash"
+        elif mat == "cloth":
+            from mimika.face.makehuman.paint.cloth import paint_cloth
+
+            k = int(piece.name.removeprefix("clothes") or 0)
+            asset = character.clothes[k]
+            tex = Texture(paint_cloth(piece, asset, character.name), asset)
         out.append(Part(mat, faces, tex, mode))
     return tuple(out)

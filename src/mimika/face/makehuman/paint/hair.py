@@ -144,7 +144,7 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
         for *_, below in poles[1:]:
             s = cen[:, 1] < below
             flow3[s] = [0.0, -1.0, 0.0]
-        flow_uv = np.einsum("fij,fi->fj", np.linalg.pinv(jac), flow3)  # (F, 2)
+        flow_uv = np.einsum("fji,fi->fj", np.linalg.pinv(jac), flow3)  # (F, 2)
         w = area3 * uvarea
         mean = np.stack([np.bincount(lab, w * flow_uv[:, k] / np.maximum(
             np.linalg.norm(flow_uv, axis=1), 1e-12)) for k in (0, 1)], 1)
@@ -179,7 +179,8 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
         clump = octave(st["clump_cm"], 11)
         strand = octave(st["strand_cm"] * 3, 12)
         fibre = octave(st["strand_cm"], 13)
-        length = 0.7 * octave(st["strand_cm"] * 1.5, 14) + 0.3 * octave(st["clump_cm"], 15)
+        raw = 0.75 * octave(st["strand_cm"] * 1.5, 14) + 0.25 * octave(st["clump_cm"], 15)
+        length = smoothstep(0.3, 0.7, raw)  # spread the strand ends over the fade
 
     # alpha: 1 inside; within fade_cm of the border each strand ends at its own length
     fade = float(st["fade_cm"])
@@ -207,10 +208,10 @@ def _grey_strands(c, base, strand, fibre, hex_color: str) -> np.ndarray:
                                                                       np.float32(s.max())))
     if grey <= 0:
         return c
-    white = smoothstep(0.5, 0.75, 0.3 * strand + 0.7 * fibre)
+    white = smoothstep(0.45, 0.65, 0.3 * strand + 0.7 * fibre)
     lum = float(color.luminance(base))
     share = 0.3  # white strands
-    light = np.full(3, min(3.0 * lum, 0.5), np.float32)
+    light = np.full(3, min(1.8 * lum, 0.5), np.float32)
     dark = np.maximum(base - share * light, 0.2 * base) / (1 - share)
     mixed = dark[None, :] * (1 - white[:, None]) + light[None, :] * white[:, None]
     mixed *= (c / np.maximum(base, 1e-6)).mean(1, keepdims=True)

@@ -23,7 +23,14 @@ from mimika.face.makehuman.paint import color
 from mimika.face.makehuman.paint.noise import fbm3, seed_of, smoothstep, value3
 from mimika.face.makehuman.paint.raster import rasterize
 from mimika.face.makehuman.paint.regions import sample, skin_regions, uv_mask
-from mimika.face.makehuman.paint.surface import adjacency, cavity, diffuse, smooth_normals, welded
+from mimika.face.makehuman.paint.surface import (
+    adjacency,
+    boundary_edges,
+    cavity,
+    diffuse,
+    smooth_normals,
+    welded,
+)
 from mimika.face.makehuman.proxy import read_mhclo
 
 HEAD_SIZE = (1024, 2048)
@@ -67,6 +74,19 @@ def head_uvs(uv: np.ndarray, verts: np.ndarray) -> np.ndarray:
     return out.astype(np.float32)
 
 
+def _lid_margin(pos: np.ndarray, tris: np.ndarray, weld: np.ndarray, lm: np.ndarray
+                ) -> np.ndarray:
+    """Per vertex: distance (cm) to the eye openings' rims (the lid margins)."""
+    from scipy.spatial import cKDTree
+
+    rim = np.unique(boundary_edges(tris, weld))
+    eyes = np.stack([lm[36:42].mean(0), lm[42:48].mean(0)])
+    near = np.min(np.linalg.norm(pos[rim][:, None] - eyes[None], axis=2), axis=1) < 2.2
+    if not near.any():
+        return np.full(len(pos), 10.0)
+    return cKDTree(pos[rim[near]]).query(pos)[0]
+
+
 def _scalp_cover(piece: Piece, character: Character, avg, key, m) -> np.ndarray:
     """Per welded vertex: 1 under the hair (its ``.mhclo`` binds to these base vertices),
     shrunk a little from the hairline and softened."""
@@ -75,7 +95,7 @@ def _scalp_cover(piece: Piece, character: Character, avg, key, m) -> np.ndarray:
     refs = np.unique(read_mhclo(asset_path("hair", character.hair)).refs)
     cov = np.zeros(m)
     cov[key] = np.isin(piece.weld, refs)
-    for _ in range(2):  # erode: a vertex stays covered only if its neighbours are
+    for _ in range(4):  # erode: a vertex stays covered only if its neighbours are
         cov = np.minimum(cov, (avg @ cov > 0.99).astype(float))
     return diffuse(cov, avg, 6)
 
@@ -179,15 +199,16 @@ def paint_skin(piece: Piece, character: Character) -> SkinPaint:
     key, m = welded(len(pos), piece.weld)
     avg = adjacency(tris, key, m)
     cav = diffuse(cavity(pos, nrm, avg, key, m), avg, 2)[key]
-    cover = _scalp_cover(piece, character, avg, key, m)[key]
     lm = landmarks(piece)
+    margin = _lid_margin(pos, tris, piece.weld, lm)
+    cover = _scalp_cover(piece, character, avg, key, m)[key]
     seed = seed_of("skin", character.name, character.skin, sorted(character.phenotype.items()))
     base = color.hex_linear(character.skin)
     hair = color.hex_linear(character.hair_color)
     ph = _phenotype(character)
 
-    head = _paint_head(rasterize(uvs, tris[region < 2], HEAD_SIZE), pos, uv0, cav, cover, lm,
-                       base, hair, ph, seed)
+    head = _paint_head(rasterize(uvs, tris[region < 2], HEAD_SIZE), pos, uv0, cav, cover,
+                       margin, lm, base, hair, ph, seed)
     body = _paint_body(rasterize(uv0, tris[region == 2], BODY_SIZE), pos, uv0, base, seed)
     return SkinPaint(region, uvs, head, body)
 
@@ -199,7 +220,7 @@ def _skin_noise(p: np.ndarray, c: np.ndarray, coarse: np.ndarray, seed: int,
     pore field (for the gloss)."""
     fine = value3(p, 0.3, seed + 10, order=1) - 0.5
     c = c * (1.0 + 0.05 * coarse[:, 0] + 0.05 * fine)[:, None]
-    c = color.tint(c, (0.10 + 0.12 * light) * coarse[:, 1], (1.0, 0.82, 0.82))
+    c = color.tint(c, (0.06 + 0.08 * light) * coarse[:, 1], (1.0, 0.84, 0.84))
     pores = smoothstep(0.56, 0.8, value3(p, 0.045, seed + 30, order=1))
     c = c * (1.0 - 0.05 * pores)[:, None]
     return c, pores
@@ -213,21 +234,22 @@ def _coarse(pos: np.ndarray, seed: int) -> np.ndarray:
 
 #: per-vertex region fields of the head, in this order
 _FIELDS = ("cheeks", "nose", "undereye", "forehead", "tzone", "brows", "beard", "neck",
-           "cav", "cover", "mott", "blotch")
+           "cav", "cover", "mott", "blotch", "margin")
 
 
-def _head_fields(pos, cav, cover, f: _Face, seed: int) -> np.ndarray:
+def _head_fields(pos, cav, cover, margin, f: _Face, seed: int) -> np.ndarray:
     """(N, len(_FIELDS)) per-vertex fields (smooth at the mesh's ~4 mm edge length)."""
     neck = smoothstep(f.chin[1] - 1.0, f.chin[1] - 5.0, pos[:, 1])
     return np.column_stack([f.cheeks(pos), f.nose(pos), f.undereye(pos), f.forehead(pos),
                             f.tzone(pos), f.brows(pos), f.beard(pos), neck,
                             np.clip(cav * 3.0, -1.0, 1.0), np.clip(cover, 0, 1),
-                            _coarse(pos, seed)]).astype(np.float32)
+                            _coarse(pos, seed), margin]).astype(np.float32)
 
 
-def _paint_head(at, pos, uv0, cav, cover, lm, base, hair, ph, seed) -> np.ndarray:
+def _paint_head(at, pos, uv0, cav, cover, margin, lm, base, hair, ph, seed) -> np.ndarray:
     f = _Face(lm)
-    v = dict(zip(_FIELDS, at.at(_head_fields(pos, cav, cover, f, seed)).T, strict=True))
+    v = dict(zip(_FIELDS, at.at(_head_fields(pos, cav, cover, margin, f, seed)).T,
+                 strict=True))
     p = at.at(pos)
     u0 = at.at(uv0)
     light = float(np.clip((color.luminance(base) - 0.04) / 0.4, 0.0, 1.0))  # fair ↔ dark
@@ -240,9 +262,9 @@ def _paint_head(at, pos, uv0, cav, cover, lm, base, hair, ph, seed) -> np.ndarra
     mouth = sample(uv_mask("inside-mouth"), u0, bilinear=True)
     cheeks, nose, tz = v["cheeks"], v["nose"], v["tzone"]
 
-    c = color.tint(c, 0.55 * red * cheeks, (1.0, 0.80, 0.80))
-    c = color.tint(c, 0.6 * red * nose, (1.0, 0.80, 0.78))
-    c = color.tint(c, 0.55 * red * ears, (0.97, 0.78, 0.76))
+    c = color.tint(c, 0.35 * red * cheeks, (1.0, 0.82, 0.82))
+    c = color.tint(c, 0.4 * red * nose, (1.0, 0.82, 0.80))
+    c = color.tint(c, 0.4 * red * ears, (0.97, 0.8, 0.78))
     c = color.tint(c, 0.7 * lids, (0.9, 0.82, 0.86))
     c = color.tint(c, 0.6 * v["undereye"], (0.9, 0.86, 0.92))
     c = color.tint(c, 0.6 * v["forehead"], (1.03, 1.01, 0.93))
@@ -258,7 +280,7 @@ def _paint_head(at, pos, uv0, cav, cover, lm, base, hair, ph, seed) -> np.ndarra
 
     # creases and hollows a little darker and redder (light scattered inside)
     cv = v["cav"]
-    c = color.tint(c, np.clip(cv, 0, 1) * 0.5, (0.85, 0.72, 0.72))
+    c = color.tint(c, np.clip(cv, 0, 1) * 0.5, (0.86, 0.78, 0.78))
     c = c * (1.0 - 0.05 * np.clip(-cv, 0, 1))[:, None]  # ridges very slightly lighter
 
     # lips: a darker, redder version of the skin (purplish on dark skin), fine vertical lines
@@ -269,10 +291,14 @@ def _paint_head(at, pos, uv0, cav, cover, lm, base, hair, ph, seed) -> np.ndarra
     c = color.mix(c, lipc, lips * 0.92)
     c = color.mix(c, np.array([0.16, 0.035, 0.03]) * (0.4 + 0.6 * light), mouth)
 
+    # the lash line: the lid margins darker (lash roots), a little redder just inside
+    rim = np.exp(-(v["margin"] / 0.12) ** 2)
+    c = color.mix(c, c * 0.35 + 0.25 * hair, 0.75 * rim)
+
     # brows: skin under them a little darker (hair roots); scalp tinted by the hair
     c = color.mix(c, c * 0.55 + 0.45 * hair, 0.45 * v["brows"])
     scalp = v["cover"]
-    c = color.mix(c, 0.7 * hair + 0.3 * c * 0.6, 0.9 * scalp)
+    c = color.mix(c, 0.7 * c + 0.12 * hair, 0.9 * scalp)
 
     # beard shadow: stubble dots over a bluish shadow, strength by sex and age
     g_beard = ph["male"] * (0.55 + 0.45 * smoothstep(18.0, 45.0, np.float32(ph["age"])))
