@@ -196,6 +196,9 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     # colour: clump, strand and fibre tones; darker roots near the scalp; lighter tips
     base = color.hex_linear(character.hair_color)
     tone = 1.0 + 0.35 * (clump - 0.5) + 0.3 * (strand - 0.5) + 0.25 * (fibre - 0.5)
+    # at the crown strands converge below the texture's resolution: a whorl of short hairs
+    whorl = 1.0 - smoothstep(1.0, 2.5, st["strand_cm"] * 3 * scale / np.maximum(tsz, 1e-6))
+    tone = tone + 0.3 * whorl * (value3(p, 0.09, seed + 8, order=1) - 0.5)
     h = at.at(np.linalg.norm(piece.meta.get("offsets", np.zeros_like(pos)), axis=1) * CM)
     root = 1.0 - smoothstep(0.15, 1.2, h)
     tone = tone * (1.0 - st["root_dark"] * root) * (1.0 + 0.12 * (1.0 - edge))

@@ -250,7 +250,7 @@ def _skin_noise(p: np.ndarray, c: np.ndarray, coarse: np.ndarray, seed: int,
     c = c * (1.0 + 0.05 * coarse[:, 0] + 0.05 * fine)[:, None]
     c = color.tint(c, (0.06 + 0.08 * light) * coarse[:, 1], (1.0, 0.84, 0.84))
     pores = smoothstep(0.56, 0.8, value3(p, 0.045, seed + 30, order=1))
-    c = c * (1.0 - 0.05 * pores)[:, None]
+    c = c * (1.0 - 0.03 * pores)[:, None]
     return c, pores
 
 
