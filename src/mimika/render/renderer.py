@@ -265,13 +265,16 @@ class Renderer:
         those settings.
     lighting
         Lights and backdrop (:class:`mimika.render.skin.Lighting`); default: mimika's look.
+    hidden
+        Names of objects not to draw (e.g. ``("hair",)``).
 
     The GL context is created on the first :meth:`render`; ``close()`` (or leaving a
     ``with`` block) frees this renderer's GPU objects.
     """
 
     def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4,
-                 skin_shader: Any = False, lighting: Any = None) -> None:
+                 skin_shader: Any = False, lighting: Any = None,
+                 hidden: Any = ()) -> None:
         try:
             w, h = (int(s) for s in size)
         except (TypeError, ValueError):
@@ -285,6 +288,12 @@ class Renderer:
         self.samples = int(samples)
         self.skin_shader = skin_shader
         self.lighting = lighting
+        names = {o.name for o in head.objects}
+        unknown = sorted(set(hidden) - names)
+        if unknown:
+            raise ParameterError(f"hidden: head {head.name!r} has no object {unknown[0]!r}; "
+                                 f"objects: {', '.join(sorted(names))}")
+        self.hidden = frozenset(hidden)
         self._skin: Any = None
         self._cameras: dict[str, Camera] = {}
         self._gl: dict[str, Any] | None = None
@@ -552,7 +561,8 @@ class Renderer:
             gl["attachments"].append(depth)
             gl["fbo"] = gl["resolve"] = ctx.framebuffer(resolve_color, depth)
 
-        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects if o.parts]
+        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects
+                         if o.parts and o.name not in self.hidden]
         if self.skin_shader:
             from mimika.render.skin import DEFAULT_LIGHTING, SkinShader
 

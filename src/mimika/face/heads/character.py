@@ -117,7 +117,8 @@ def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, S
     shapes = ShapeSet(names, {k: v * scale for k, v in built.deltas.items()})
     table = load_table("makehuman_aus.json")
     skinning = Skinning(sk.names, heads_cm, sk.parents, built.weights,
-                        {k: np.asarray(v) for k, v in pose.items()}, table["head_share"])
+                        {k: np.asarray(v) for k, v in pose.items()}, table["head_share"],
+                        table.get("body", {}))
     return head, SkinnedRig(head, bind_head, shapes, table, skinning)
 
 
