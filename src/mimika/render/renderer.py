@@ -159,7 +159,7 @@ class _GpuObject:
                 f"object {obj.name!r}: face indices must be in [0, {obj.n_vertices}), "
                 f"got [{faces.min()}, {faces.max()}]"
             )
-        if _winding_inward(obj.vertices, faces):
+        if not obj.oriented and _winding_inward(obj.vertices, faces):
             log.info("object %r: faces wind clockwise seen from outside; flipping", obj.name)
             faces = faces[:, [0, 2, 1]].copy()
         self.faces = faces
