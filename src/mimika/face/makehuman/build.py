@@ -142,8 +142,8 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
                margin: float = 0.03) -> int:
     """Push skin vertices that poke through ``cloth`` back under it, in place: a vertex whose
     inward ray meets the cloth within ``reach`` (base units) moves inward past it by
-    ``margin``. Returns how many moved. (``delete_verts`` hides most of the covered body;
-    this fixes the edges: collars, cuffs.)"""
+    ``margin``, under every layer. Returns how many moves it made. (``delete_verts`` hides
+    most of the covered body; this fixes the edges: collars, cuffs.)"""
     from scipy.spatial import cKDTree
 
     from mimika.face.meshgen import vertex_normals
@@ -161,9 +161,11 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
     near = np.flatnonzero(kd.query(v, distance_upper_bound=reach * 2)[0] < np.inf)
     moved = 0
     for i in near:
-        cand = kd.query_ball_point(v[i], reach * 3)
-        t = _first_hit(v[i:i + 1], -n[i:i + 1], tri[cand], reach)[0]
-        if np.isfinite(t):
+        for _ in range(4):  # layered clothes (collar over shirt): tuck under each layer
+            cand = kd.query_ball_point(v[i], reach * 3)
+            t = _first_hit(v[i:i + 1], -n[i:i + 1], tri[cand], reach)[0]
+            if not np.isfinite(t):
+                break
             v[i] -= n[i] * (t + margin)
             moved += 1
     skin_piece.vertices = v[inv].astype(np.float32)
