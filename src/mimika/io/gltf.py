@@ -166,6 +166,14 @@ class _Builder:
         self.accessors.append(acc)
         return len(self.accessors) - 1
 
+    def add_bytes(self, data: bytes) -> int:
+        """A buffer view holding ``data`` (an image); returns its index."""
+        while len(self.bin) % 4:
+            self.bin.append(0)
+        self.views.append({"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data)})
+        self.bin += data
+        return len(self.views) - 1
+
 
 _DELTAS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -194,6 +202,10 @@ def _morph_deltas(rig: Rig, codes: tuple[str, ...]) -> dict[str, list[tuple[str,
 def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = None
                ) -> tuple[dict, bytes]:
     """The glTF JSON document and its binary buffer for ``rig``'s head (+ ``track``)."""
+    if getattr(rig, "skinning", None) is not None:  # a character with a skeleton
+        from mimika.io.gltf_skinned import build_skinned_gltf
+
+        return build_skinned_gltf(rig, track, name=name)
     head: Head = rig.head
     b = _Builder()
     mats_src = _materials()
