@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import size_arg
+from mimika.commands._util import add_head_arg, size_arg
 from mimika.errors import ParameterError
 
 CSV_FORMATS = ("au", "openface", "arkit")
@@ -194,7 +194,7 @@ def _common(p, *, head: bool = True) -> None:
                    help="CSV layout: au (time,AU01,…; default), openface, arkit (Live Link Face)")
     p.add_argument("--fps", type=float, help="frames per second (default: project or 25)")
     if head:
-        p.add_argument("--head", default="builtin", help="builtin (default), ict, a folder or .obj")
+        add_head_arg(p)
     p.add_argument("--view", default="front", choices=("front", "three-quarter", "profile"),
                    help="camera for .png")
     p.add_argument("--size", type=size_arg, default=(320, 240), help="tile size for .png")
