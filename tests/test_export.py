@@ -34,7 +34,7 @@ def test_au_csv_roundtrip(tmp_path, track):
 def test_openface_roundtrip(tmp_path, track):
     p = write_track(track, tmp_path / "of.csv", format="openface")
     head = p.read_text().splitlines()[0]
-    assert head.startswith("frame, face_id, timestamp, confidence, success, AU01_r")
+    assert head.startswith("frame, face_id, timestamp, confidence, success, gaze_0_x")
     assert "AU01_c" in head and "AU28_c" in head
     back = read_track(p)
     assert detect_format(p) == "openface" and back.fps == 30.0
@@ -83,7 +83,7 @@ def test_fill_gaps_methods():
     ("time,AU1x\n0,0.5\n", r"x.csv:1:AU1x: unknown Action Unit"),
     ("time,AU01\n0,0.5,1\n", r"x.csv:2: 3 fields"),
     ("time,AU01\n0,1.5\n", r"x.csv:2:AU01: 1.5 is outside"),
-    ("time,AU01\n0.1,0.5\n0.0,0.5\n", r"x.csv:3: time does not increase"),
+    ("time,AU01\n0.1,0.5\n0.0,0.5\n", r"x.csv:3: time 0 does not increase"),
     ("Timecode,BlendShapeCount,EyeBlinkLeft\n", r"x.csv:1: missing column\(s\) EyeLookDownLeft"),
     ("frame, face_id, timestamp, success\n1, 0, 0, 1\n", r"x.csv:1: no AU intensity"),
     ("hello,world\n", r"x.csv:1: unknown CSV layout"),

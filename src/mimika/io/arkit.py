@@ -17,7 +17,8 @@ import numpy as np
 
 from mimika.facs import parse_au
 
-__all__ = ["ARKIT_52", "LIVELINK_COLUMNS", "ROTATIONS", "arkit_to_aus", "aus_to_arkit"]
+__all__ = ["ARKIT_52", "EXTRAS", "LIVELINK_COLUMNS", "ROTATIONS", "arkit_extras", "arkit_to_aus",
+           "aus_to_arkit", "table"]
 
 #: the 52 ARKit blendshapes in Live Link Face's column order
 ARKIT_52 = (
@@ -40,8 +41,15 @@ LIVELINK_COLUMNS = ("Timecode", "BlendShapeCount", *ARKIT_52, *ROTATIONS)
 _INDEX = {n: i for i, n in enumerate(ARKIT_52)}
 
 
+#: Live Link channels no AU can say (and the jaw's direction, which AU30 loses): carried in
+#: ``track.meta["arkit_extra"]`` from import to export
+EXTRAS = ("JawLeft", "JawRight", "MouthClose", "MouthLeft", "MouthRight", "LeftEyeRoll",
+          "RightEyeRoll")
+
+
 @lru_cache(maxsize=1)
-def _table() -> dict:
+def table() -> dict:
+    """``io/data/arkit_aus.json``: ARKit → AU import table, head and eye rotation scales."""
     text = resources.files("mimika.io").joinpath("data/arkit_aus.json").read_text("utf-8")
     return json.loads(text)
 
@@ -68,7 +76,7 @@ def aus_to_arkit(values: np.ndarray, channels: Sequence[str]) -> tuple[np.ndarra
     """AU frames (T, K) → ARKit blendshapes (T, 52) in [0, 1] and rotations (T, 9) in radians."""
     from mimika.face.blendshape import load_table
 
-    table = {**_table()["export_extra"], **load_table()["aus"]}
+    spec_of = {**table()["export_extra"], **load_table()["aus"]}
     v = np.asarray(values, np.float64).reshape(len(values), len(channels))
     out = np.zeros((len(v), len(ARKIT_52)))
     rot = np.zeros((len(v), len(ROTATIONS)))
@@ -77,7 +85,7 @@ def aus_to_arkit(values: np.ndarray, channels: Sequence[str]) -> tuple[np.ndarra
     for k, raw in enumerate(channels):
         code = parse_au(raw)
         base, side = code[:4], code[4:] or None
-        spec = table.get(base)
+        spec = spec_of.get(base)
         if spec is None:
             continue
         if side is None and spec.get("bilateral_side"):
@@ -111,7 +119,7 @@ def arkit_to_aus(shapes: np.ndarray, rotations: np.ndarray | None = None, *,
         return x[:, idx[name]] if name in idx else np.zeros(len(x))
 
     cols: dict[str, np.ndarray] = {}
-    for code, spec in _table()["aus"].items():
+    for code, spec in table()["aus"].items():
         if "L" in spec:
             left, right = col(spec["L"]), col(spec["R"])
             both = np.minimum(left, right)
@@ -124,14 +132,31 @@ def arkit_to_aus(shapes: np.ndarray, rotations: np.ndarray | None = None, *,
         else:
             cols[code] = np.mean([col(n) for n in spec["mean"]], axis=0)
     if rotations is not None:
+        from mimika.io.rotations import head_aus
+
         r = np.asarray(rotations, np.float64)
-        for j, (name, (neg, pos, deg)) in enumerate(_table()["head"].items()):
-            assert ROTATIONS[j] == name
-            a = r[:, j] / np.radians(deg)
-            cols[neg] = np.clip(-a, 0, 1)
-            cols[pos] = np.clip(a, 0, 1)
-    table = _table()["aus"]
-    keep = [c for c, v in cols.items() if c in table or np.any(v > 1e-6)]
+        cols.update(head_aus(r[:, 0], r[:, 1], r[:, 2]))
+    aus = table()["aus"]
+    keep = [c for c, v in cols.items() if c in aus or np.any(v > 1e-6)]
     keep.sort(key=lambda c: (int(c[2:4]), ("", "L", "R").index(c[4:])))
     vals = np.stack([cols[c] for c in keep], axis=1) if keep else np.zeros((len(x), 0))
     return np.clip(vals, 0.0, 1.0).astype(np.float32), tuple(keep)
+
+
+def arkit_extras(shapes: np.ndarray, rotations: np.ndarray | None, *, fps: float,
+                 names: Sequence[str] = ARKIT_52) -> dict:
+    """The :data:`EXTRAS` channels of ARKit frames — ``{"fps": fps, name: (T,) float32}`` —
+    for ``track.meta["arkit_extra"]``, where the Live Link writer finds them again."""
+    idx = {n: i for i, n in enumerate(names)}
+    x = np.asarray(shapes, np.float32)
+    out: dict = {"fps": float(fps)}
+    for n in EXTRAS:
+        if n in idx:
+            v = x[:, idx[n]].copy()
+        elif n in ROTATIONS and rotations is not None:
+            v = np.asarray(rotations, np.float32)[:, ROTATIONS.index(n)].copy()
+        else:
+            continue
+        v.setflags(write=False)
+        out[n] = v
+    return out
