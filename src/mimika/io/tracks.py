@@ -23,10 +23,10 @@ from mimika.io.openface import OPENFACE_AUS, read_openface_csv, write_openface_c
 from mimika.io.pyfeat import is_pyfeat_header, read_pyfeat_csv
 from mimika.tracks import AUTrack
 
-__all__ = ["FILLS", "FORMATS", "OPENFACE_AUS", "READ_FORMATS", "detect_format", "fill_gaps",
-           "read_au_csv", "read_livelink_csv", "read_openface_csv", "read_pyfeat_csv",
-           "read_track", "write_au_csv", "write_livelink_csv", "write_openface_csv",
-           "write_track"]
+__all__ = ["FILLS", "FORMATS", "FORMAT_NAMES", "OPENFACE_AUS", "READ_FORMATS", "READ_OPTIONS",
+           "detect_format", "fill_gaps", "read_au_csv", "read_livelink_csv",
+           "read_openface_csv", "read_pyfeat_csv", "read_track", "write_au_csv",
+           "write_livelink_csv", "write_openface_csv", "write_track"]
 
 #: layouts mimika writes
 FORMATS = ("au", "openface", "arkit")
@@ -35,10 +35,11 @@ READ_FORMATS = (*FORMATS, "pyfeat")
 _READERS = {"au": read_au_csv, "openface": read_openface_csv, "arkit": read_livelink_csv,
             "pyfeat": read_pyfeat_csv}
 _WRITERS = {"au": write_au_csv, "openface": write_openface_csv, "arkit": write_livelink_csv}
-_OPTIONS = {"au": {"fps"}, "openface": {"fill", "face_id", "scale", "fps"},
+#: the keyword options each reader takes
+READ_OPTIONS = {"au": {"fps"}, "openface": {"fill", "face_id", "scale", "fps"},
             "arkit": {"fill", "timecode_fps", "timecodes", "max_gap"},
             "pyfeat": {"fill", "source", "fps"}}
-_NAMES = {"au": "AU CSV", "openface": "OpenFace", "arkit": "Live Link Face",
+FORMAT_NAMES = {"au": "AU CSV", "openface": "OpenFace", "arkit": "Live Link Face",
           "pyfeat": "py-feat"}
 
 
@@ -77,9 +78,9 @@ def read_track(path: str | os.PathLike, *, format: str | None = None, **options)
     fmt = format or detect_format(path)
     if fmt not in _READERS:
         raise ParameterError(f"format={fmt!r} must be one of {', '.join(READ_FORMATS)}")
-    extra = sorted(set(options) - _OPTIONS[fmt])
+    extra = sorted(set(options) - READ_OPTIONS[fmt])
     if extra:
-        raise ParameterError(f"{', '.join(extra)} does not apply to {_NAMES[fmt]} files "
+        raise ParameterError(f"{', '.join(extra)} does not apply to {FORMAT_NAMES[fmt]} files "
                              f"({path})")
     return _READERS[fmt](path, **options)
 
