@@ -17,8 +17,8 @@ import numpy as np
 
 from mimika.facs import parse_au
 
-__all__ = ["ARKIT_52", "EXTRAS", "LIVELINK_COLUMNS", "ROTATIONS", "arkit_extras", "arkit_to_aus",
-           "aus_to_arkit", "table"]
+__all__ = ["ARKIT_52", "LIVELINK_COLUMNS", "ROTATIONS", "apply_extras", "arkit_extras",
+           "arkit_to_aus", "aus_to_arkit", "extra_names", "shape_groups", "table"]
 
 #: the 52 ARKit blendshapes in Live Link Face's column order
 ARKIT_52 = (
@@ -41,10 +41,8 @@ LIVELINK_COLUMNS = ("Timecode", "BlendShapeCount", *ARKIT_52, *ROTATIONS)
 _INDEX = {n: i for i, n in enumerate(ARKIT_52)}
 
 
-#: Live Link channels no AU can say (and the jaw's direction, which AU30 loses): carried in
-#: ``track.meta["arkit_extra"]`` from import to export
-EXTRAS = ("JawLeft", "JawRight", "MouthClose", "MouthLeft", "MouthRight", "LeftEyeRoll",
-          "RightEyeRoll")
+#: ARKit shapes no AU can say
+_NO_AU = ("MouthClose", "MouthLeft", "MouthRight")
 
 
 @lru_cache(maxsize=1)
@@ -143,20 +141,62 @@ def arkit_to_aus(shapes: np.ndarray, rotations: np.ndarray | None = None, *,
     return np.clip(vals, 0.0, 1.0).astype(np.float32), tuple(keep)
 
 
+@lru_cache(maxsize=1)
+def shape_groups() -> dict[str, tuple[str, tuple[str, ...]]]:
+    """AUs imported from several shapes at once: ``{code: ("mean" | "max", shapes)}`` (AU28
+    from both lip rolls, AU30 from JawLeft/JawRight, AU61–64 from both eyes' look shapes)."""
+    return {c: (k, tuple(spec[k])) for c, spec in table()["aus"].items()
+            for k in ("mean", "max") if len(spec.get(k, ())) > 1}
+
+
+@lru_cache(maxsize=1)
+def extra_names() -> tuple[str, ...]:
+    """What an AU track cannot carry exactly: MouthClose, MouthLeft/Right, the shapes of
+    :func:`shape_groups` (how the group's AU splits between them: the jaw's direction, each
+    eye's and each lip's share) and the 9 rotations (as their difference from what the AUs
+    imply: eye roll, the tracker's own eye angles, head turns beyond intensity 1)."""
+    return (*_NO_AU, *(n for _, names in shape_groups().values() for n in names), *ROTATIONS)
+
+
 def arkit_extras(shapes: np.ndarray, rotations: np.ndarray | None, *, fps: float,
                  names: Sequence[str] = ARKIT_52) -> dict:
-    """The :data:`EXTRAS` channels of ARKit frames — ``{"fps": fps, name: (T,) float32}`` —
-    for ``track.meta["arkit_extra"]``, where the Live Link writer finds them again."""
+    """The :func:`extra_names` channels of ARKit frames — ``{"fps": fps, name: (T,)}`` — for
+    ``track.meta["arkit_extra"]``, where :func:`apply_extras` finds them again on export."""
     idx = {n: i for i, n in enumerate(names)}
-    x = np.asarray(shapes, np.float32)
+    x = np.clip(np.asarray(shapes, np.float32), 0.0, 1.0)  # as the AUs see them
     out: dict = {"fps": float(fps)}
-    for n in EXTRAS:
+    for n in extra_names():
         if n in idx:
-            v = x[:, idx[n]].copy()
-        elif n in ROTATIONS and rotations is not None:
-            v = np.asarray(rotations, np.float32)[:, ROTATIONS.index(n)].copy()
-        else:
-            continue
-        v.setflags(write=False)
-        out[n] = v
+            out[n] = x[:, idx[n]].copy()
+    if rotations is not None:
+        vals, chans = arkit_to_aus(x, rotations, names=names)
+        implied = aus_to_arkit(vals, chans)[1]
+        rest = np.asarray(rotations, np.float32) - implied
+        out.update({n: rest[:, j].copy() for j, n in enumerate(ROTATIONS)})
+    for v in out.values():
+        if isinstance(v, np.ndarray):
+            v.setflags(write=False)
     return out
+
+
+def apply_extras(shapes: np.ndarray, rot: np.ndarray, extra: dict[str, np.ndarray]) -> None:
+    """Put the :func:`extra_names` channels (resampled to the frames of ``shapes``) back into
+    exported ARKit frames, in place: the no-AU shapes as they were, each shape group's
+    exported value split between its shapes in the imported proportions, and the rotations'
+    differences added — exact when the AUs were not changed, following them when they were."""
+    for name in _NO_AU:
+        if name in extra:
+            shapes[:, _INDEX[name]] = np.clip(extra[name], 0.0, 1.0)
+    for agg, names in shape_groups().values():
+        if not all(n in extra for n in names):
+            continue
+        pool = np.mean if agg == "mean" else np.max
+        raw = np.stack([extra[n] for n in names], axis=1).astype(np.float64)
+        ref = pool(raw, axis=1)
+        now = pool(np.stack([shapes[:, _INDEX[n]] for n in names], axis=1), axis=1)
+        has = ref > 1e-6
+        for j, n in enumerate(names):
+            shapes[has, _INDEX[n]] = np.clip(now[has] * raw[has, j] / ref[has], 0.0, 1.0)
+    for j, name in enumerate(ROTATIONS):
+        if name in extra:
+            rot[:, j] += extra[name]

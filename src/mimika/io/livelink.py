@@ -28,12 +28,13 @@ import numpy as np
 from mimika.errors import DataError, ParameterError
 from mimika.io.arkit import (
     ARKIT_52,
-    EXTRAS,
     LIVELINK_COLUMNS,
     ROTATIONS,
+    apply_extras,
     arkit_extras,
     arkit_to_aus,
     aus_to_arkit,
+    extra_names,
 )
 from mimika.io.atomic import atomic_write
 from mimika.io.csvread import check_frames, num, read_table, snap_fps
@@ -187,17 +188,18 @@ def read_livelink_csv(path: str | os.PathLike, *, timecode_fps: float | None = N
     lines = [ln for ln, _ in t.rows]
     keep = _order(path, frames, lines, clock, max_gap, timecodes, notes)
     fr = frames[keep]
-    if len(fr) > 1:
-        rate = snap_fps(clock / float(np.median(np.diff(fr))), tolerance=0.01)
-        if not MIN_RATE <= rate <= MAX_RATE:
-            raise DataError(f"{path}: rows come {rate:g} times a second on the {clock:g} fps "
-                            f"timecode clock; a take has {MIN_RATE:g}–{MAX_RATE:g}")
-    else:
-        rate = min(30.0, clock)
-    step = clock / rate
-    idx = np.round((fr - fr[0]) / step).astype(np.int64)
+    d = np.diff(fr)
+    step = float(np.median(d)) if len(d) else clock / min(30.0, clock)
+    if not MIN_RATE <= clock / step <= MAX_RATE:
+        raise DataError(f"{path}: rows come {clock / step:.4g} times a second on the {clock:g} "
+                        f"fps timecode clock; a take has {MIN_RATE:g}–{MAX_RATE:g}")
+    # each row a whole number of steps after the previous one: the app's clock drifts against
+    # its labels (steps of 1.999 and 2.000 frames), so rounding from the first row would not do
+    idx = np.concatenate([[0], np.cumsum(np.maximum(1, np.round(d / step)))]).astype(np.int64)
     n = int(idx[-1]) + 1
     check_frames(n, path)
+    rate = snap_fps(clock * (n - 1) / float(fr[-1] - fr[0]), tolerance=0.01) if n > 1 \
+        else clock / step
     data = np.zeros((n, len(ARKIT_52) + len(ROTATIONS)), np.float32)
     ok = np.zeros(n, bool)
     n_drop = 0
@@ -214,11 +216,7 @@ def read_livelink_csv(path: str | os.PathLike, *, timecode_fps: float | None = N
         ok[k] = True
     if not ok.any():
         raise DataError(f"{path}: no tracked frames (every row is a drop-out)")
-    collided = len(idx) - len(np.unique(idx))
-    if collided:
-        notes.append(f"{path}: {collided} rows fell on the frame of another row (irregular "
-                     "timecodes); the later row was kept")
-    n_missing = n - len(np.unique(idx))
+    n_missing = n - len(idx)
     data = fill_gaps(data, ok, method=fill)
     shapes, rot = data[:, :len(ARKIT_52)], data[:, len(ARKIT_52):]
     vals, chans = arkit_to_aus(shapes, rot)
@@ -247,7 +245,7 @@ def _extras_at(extra: dict, n: int, fps: float) -> dict[str, np.ndarray]:
     try:
         src_fps = float(extra["fps"])
         out = {}
-        for name in EXTRAS:
+        for name in extra_names():
             if name in extra:
                 v = np.asarray(extra[name], np.float64).reshape(-1)
                 t_src = np.arange(len(v)) / src_fps
@@ -293,7 +291,7 @@ def write_livelink_csv(track: AUTrack, path: str | os.PathLike, *,
     shapes, rot = aus_to_arkit(tr.values, tr.channels)
     extra = track.meta.get("arkit_extra")
     if isinstance(extra, dict):
-        _apply_extras(shapes, rot, _extras_at(extra, n, rate))
+        apply_extras(shapes, rot, _extras_at(extra, n, rate))
     lines = [",".join(LIVELINK_COLUMNS)]
     count = str(len(ARKIT_52) + len(ROTATIONS))
     for i in range(n):
@@ -301,20 +299,3 @@ def write_livelink_csv(track: AUTrack, path: str | os.PathLike, *,
         lines.append(",".join([tc, count, *(f"{float(x):.10f}" for x in shapes[i]),
                                *(f"{float(x):.10f}" for x in rot[i])]))
     return atomic_write(path, "\n".join(lines) + "\n")
-
-
-def _apply_extras(shapes: np.ndarray, rot: np.ndarray, ex: dict[str, np.ndarray]) -> None:
-    idx = {n: i for i, n in enumerate(ARKIT_52)}
-    jl, jr = idx["JawLeft"], idx["JawRight"]
-    if "JawLeft" in ex and "JawRight" in ex:  # AU30 = max(JawLeft, JawRight): split it again
-        v = shapes[:, jl].astype(np.float64)
-        m = np.maximum(ex["JawLeft"], ex["JawRight"])
-        has = m > 1e-6
-        shapes[has, jl] = v[has] * ex["JawLeft"][has] / m[has]
-        shapes[has, jr] = v[has] * ex["JawRight"][has] / m[has]
-    for name in ("MouthClose", "MouthLeft", "MouthRight"):
-        if name in ex:
-            shapes[:, idx[name]] = np.clip(ex[name], 0.0, 1.0)
-    for name in ("LeftEyeRoll", "RightEyeRoll"):
-        if name in ex:
-            rot[:, ROTATIONS.index(name)] = ex[name]
