@@ -189,7 +189,9 @@ def read_livelink_csv(path: str | os.PathLike, *, timecode_fps: float | None = N
     keep = _order(path, frames, lines, clock, max_gap, timecodes, notes)
     fr = frames[keep]
     d = np.diff(fr)
-    step = float(np.median(d)) if len(d) else clock / min(30.0, clock)
+    # the lower median of the row steps (a gap in a short take must not set the rate)
+    step = float(np.partition(d, (len(d) - 1) // 2)[(len(d) - 1) // 2]) if len(d) \
+        else clock / min(30.0, clock)
     if not MIN_RATE <= clock / step <= MAX_RATE:
         raise DataError(f"{path}: rows come {clock / step:.4g} times a second on the {clock:g} "
                         f"fps timecode clock; a take has {MIN_RATE:g}–{MAX_RATE:g}")

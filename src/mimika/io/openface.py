@@ -40,6 +40,7 @@ _GAZE = ("gaze_0_x", "gaze_0_y", "gaze_0_z", "gaze_1_x", "gaze_1_y", "gaze_1_z",
          "gaze_angle_x", "gaze_angle_y")
 _POSE = ("pose_Tx", "pose_Ty", "pose_Tz", "pose_Rx", "pose_Ry", "pose_Rz")
 SCALES = ("auto", "5", "1")
+_TWO_DECIMALS = re.compile(r"^\s*\d+(\.\d{1,2})?\s*$")
 
 
 # -- writing --------------------------------------------------------------------------------------
@@ -104,7 +105,7 @@ def write_openface_csv(track: AUTrack, path: str | os.PathLike, *, gaze: bool = 
 
 
 # -- reading --------------------------------------------------------------------------------------
-def _scale(path, r_max: float, scale: str, notes: list[str]) -> float:
+def _scale(path, r_max: float, two_decimals: bool, scale: str, notes: list[str]) -> float:
     if scale not in SCALES:
         raise ParameterError(f"scale={scale!r} must be one of {', '.join(SCALES)}")
     if scale == "5":
@@ -116,9 +117,14 @@ def _scale(path, r_max: float, scale: str, notes: list[str]) -> float:
         return 1.0
     if r_max > 1 + 1e-6:
         return 5.0
-    notes.append(f"{path}: every AUxx_r is ≤ 1 (largest {r_max:g}): read as already "
-                 "normalised to 0–1 (as FACSvatar writes them), not divided by 5; if this is "
-                 "OpenFace's own 0–5 output of a calm face, pass --scale 5")
+    if two_decimals:  # RecorderCSV's own number format: OpenFace output of a calm face
+        notes.append(f"{path}: every AUxx_r is ≤ 1 (largest {r_max:g}) but written with "
+                     "OpenFace's 2 decimals: read on OpenFace's 0–5 scale; if the file is "
+                     "normalised to 0–1, pass --scale 1")
+        return 5.0
+    notes.append(f"{path}: every AUxx_r is ≤ 1 (largest {r_max:g}) with more than 2 decimals: "
+                 "read as already normalised to 0–1 (as FACSvatar writes them), not divided by "
+                 "5; if this is OpenFace's 0–5 output, pass --scale 5")
     return 1.0
 
 
@@ -129,7 +135,8 @@ def read_openface_csv(path: str | os.PathLike, *, fill: str = "linear",
 
     ``scale``: ``"5"`` divides ``AUxx_r`` by 5 (OpenFace's scale), ``"1"`` takes them as
     0–1 (files normalised by e.g. FACSvatar), ``"auto"`` (default) picks 5 when any value
-    exceeds 1 and otherwise reads 0–1 with a note in ``meta["notes"]``. Rows with ``success``
+    exceeds 1 or all are written with OpenFace's 2 decimals, else reads 0–1 — with a note in
+    ``meta["notes"]`` whenever every value is ≤ 1. Rows with ``success``
     0 are filled (``fill``); the first ``face_id`` is read when there are several. ``fps``
     overrides the rate the timestamps give (image sequences carry 1 ms steps).
     """
@@ -176,7 +183,8 @@ def read_openface_csv(path: str | os.PathLike, *, fill: str = "linear",
         if len(bad):
             raise DataError(f"{path}:{lines[bad[0]]}:{h}: {raw[bad[0], k]:g} is outside "
                             "OpenFace's 0–5 scale")
-    s = _scale(path, float(raw[ok].max()) if ok.any() else 0.0, scale, notes)
+    two = all(_TWO_DECIMALS.match(r[j]) for _, r, _ in rows for j, _ in rcols)
+    s = _scale(path, float(raw[ok].max()) if ok.any() else 0.0, two, scale, notes)
     cols: dict[str, np.ndarray] = {a: np.clip(raw[:, k] / s, 0, 1) for k, a in enumerate(aus)}
     yaw = pitch = None
     if all(t.col(c) is not None for c in ("pose_Rx", "pose_Ry", "pose_Rz")):
