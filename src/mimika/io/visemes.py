@@ -237,7 +237,7 @@ def read_viseme_weights(path: str | os.PathLike) -> tuple[np.ndarray, float]:
             times.append(num(p, line, "time", r[0]))
             rows.append([num(p, line, n, x) for n, x in zip(OCULUS_15, r[1:], strict=True)])
         w = np.array(rows, np.float64).reshape(len(rows), len(OCULUS_15))
-        step = times[1] - times[0] if len(times) > 1 else 0.0
+        step = (times[-1] - times[0]) / (len(times) - 1) if len(times) > 1 else 0.0
         if len(times) > 1 and (step <= 0 or np.any(np.abs(np.diff(times) - step) > 1e-3)):
             raise DataError(f"{p}: the time column must rise in equal steps")
         length = len(times) * step
