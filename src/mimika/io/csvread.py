@@ -87,6 +87,10 @@ def read_table(path: str | os.PathLike) -> Table:
         raise DataError(f"{p}:{reader.line_num}: malformed CSV ({e})") from None
     if header is None or not any(header):
         raise DataError(f"{p}:1: the file is empty; expected a CSV header")
+    broken = next((j for j, h in enumerate(header) if "\n" in h or "\r" in h), None)
+    if broken is not None:
+        raise DataError(f"{p}:1: column {broken + 1}'s name contains a line break (an "
+                        "unclosed quote?)")
     return Table(p, header, rows)
 
 

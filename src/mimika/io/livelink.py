@@ -51,6 +51,8 @@ _DAY = 24 * 3600
 #: plausible row rates of a take (rows per second)
 MIN_RATE, MAX_RATE = 1.0, 240.0
 CLOCKS = (30.0, 60.0)
+#: the largest magnitude a cell may have: shapes are 0–1 (a little over), rotations ±2π
+_LIMIT = np.concatenate([np.full(len(ARKIT_52), 2.0), np.full(len(ROTATIONS), 2 * np.pi)])
 TIMECODES = ("strict", "repair")
 #: Epic's importer: a frame number above this means a 60 fps clock
 EPIC_60FPS_FRAME = 30.0
@@ -214,7 +216,14 @@ def read_livelink_csv(path: str | os.PathLike, *, timecode_fps: float | None = N
         if len(r) != len(t.header):
             raise DataError(f"{path}:{line}: {len(r)} fields, but the header has "
                             f"{len(t.header)} (Unreal's importer stops here)")
-        data[k] = [num(path, line, LIVELINK_COLUMNS[j + 2], r[c]) for j, c in enumerate(ci)]
+        row = np.array([num(path, line, LIVELINK_COLUMNS[j + 2], r[c])
+                        for j, c in enumerate(ci)])
+        bad = np.flatnonzero(np.abs(row) > _LIMIT)
+        if len(bad):
+            name = LIVELINK_COLUMNS[bad[0] + 2]
+            raise DataError(f"{path}:{line}:{name}: {r[ci[bad[0]]].strip()[:40]!r} is out of "
+                            "range (blendshapes are 0–1, rotations radians)")
+        data[k] = row
         ok[k] = True
     if not ok.any():
         raise DataError(f"{path}: no tracked frames (every row is a drop-out)")

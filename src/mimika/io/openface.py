@@ -188,9 +188,10 @@ def read_openface_csv(path: str | os.PathLike, *, fill: str = "linear",
     cols: dict[str, np.ndarray] = {a: np.clip(raw[:, k] / s, 0, 1) for k, a in enumerate(aus)}
     yaw = pitch = None
     if all(t.col(c) is not None for c in ("pose_Rx", "pose_Ry", "pose_Rz")):
-        pitch, yaw, roll = column("pose_Rx"), column("pose_Ry"), -column("pose_Rz")
+        pitch, yaw, roll = (_angles(path, lines, c, column(c)) * sign for c, sign in
+                            (("pose_Rx", 1), ("pose_Ry", 1), ("pose_Rz", -1)))
         cols.update(head_aus(yaw, pitch, roll))
-    gaze = _gaze_angles(t, column)
+    gaze = _gaze_angles(t, column, lines)
     if gaze is not None:
         ax, ay = gaze
         eye_yaw = -ax - (yaw if yaw is not None else 0.0)
@@ -212,11 +213,21 @@ def read_openface_csv(path: str | os.PathLike, *, fill: str = "linear",
     return AUTrack(fill_gaps(vals, ok, method=fill), chans, rate, meta)
 
 
-def _gaze_angles(t, column) -> tuple[np.ndarray, np.ndarray] | None:
+def _angles(path, lines: list[int], name: str, v: np.ndarray) -> np.ndarray:
+    """``v`` (radians) checked to lie within ±2π."""
+    bad = np.flatnonzero(np.abs(v) > 2 * np.pi)
+    if len(bad):
+        raise DataError(f"{path}:{lines[bad[0]]}:{name}: {v[bad[0]]:g} is not an angle in "
+                        "radians")
+    return v
+
+
+def _gaze_angles(t, column, lines: list[int]) -> tuple[np.ndarray, np.ndarray] | None:
     """Camera-space gaze angles (``gaze_angle_x/y``, or computed from the two gaze vectors as
     OpenFace does for older files that lack them)."""
     if t.col("gaze_angle_x") is not None and t.col("gaze_angle_y") is not None:
-        return column("gaze_angle_x"), column("gaze_angle_y")
+        return tuple(_angles(t.path, lines, c, column(c)) for c in ("gaze_angle_x",
+                                                                      "gaze_angle_y"))
     if all(t.col(c) is not None for c in _GAZE[:6]):
         g = sum(np.stack([column(f"gaze_{e}_{a}") for a in "xyz"], axis=1) for e in (0, 1))
         return np.arctan2(g[:, 0], -g[:, 2]), np.arctan2(g[:, 1], -g[:, 2])

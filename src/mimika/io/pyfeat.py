@@ -141,9 +141,12 @@ def read_pyfeat_csv(path: str | os.PathLike, *, source: str = "blendshapes",
         h = _maybe(path, line, "FaceRectHeight", r[t.col("FaceRectHeight")]) \
             if t.col("FaceRectHeight") is not None else 1.0
         area = abs((w or 0.0) * (h or 0.0))
-        for c, v in zip(names, vals, strict=False):
-            if not -0.01 <= v <= 1.01:
+        for c, v in zip(value_cols, vals, strict=True):
+            if c in names and not -0.01 <= v <= 1.01:
                 raise DataError(f"{path}:{line}:{c}: {v:g} is outside [0, 1]")
+            if c not in names and abs(v) > 360:
+                raise DataError(f"{path}:{line}:{c}: {v:g} is not an angle (radians, or "
+                                "degrees in older py-feat)")
         if area > best.get(frame, (-1.0, []))[0]:
             best[frame] = (area, [float(v) for v in vals])
     if not best:

@@ -178,9 +178,14 @@ def _load_json(path: str | os.PathLike) -> Any:
 
 
 def _number(p, where: str, v: Any) -> float:
-    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-        raise DataError(f"{p}: {where}: {v!r} is not a finite number")
-    return float(v)
+    try:
+        f = float(v) if isinstance(v, int | float) and not isinstance(v, bool) else math.nan
+    except OverflowError:
+        f = math.inf
+    if not math.isfinite(f):
+        shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:40] + "…"
+        raise DataError(f"{p}: {where}: {shown} is not a finite number")
+    return f
 
 
 def read_rhubarb_json(path: str | os.PathLike) -> tuple[float, list[dict]]:
