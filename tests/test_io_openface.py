@@ -144,3 +144,9 @@ def test_calm_openface_output_stays_on_the_0_5_scale(tmp_path):
     back = read_track(write_track(calm, tmp_path / "calm.csv", format="openface"))
     assert back.meta["scale"] == 5 and np.allclose(back["AU12"], 0.1)
     assert "2 decimals" in back.meta["notes"][0]
+
+
+def test_body_channels_have_no_openface_column(tmp_path):
+    tr = AUTrack(np.full((4, 2), 0.5), ("AU12", "body.breath"), 30)
+    p = write_track(tr, tmp_path / "b.csv", format="openface")
+    assert "body" not in p.read_text() and np.allclose(read_track(p)["AU12"], 0.5)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from mimika.errors import DataError, ParameterError
-from mimika.facs import AU_CATALOGUE, parse_au
+from mimika.facs import AU_CATALOGUE, is_body, parse_au
 from mimika.io.atomic import atomic_write
 from mimika.io.csvread import check_frames, fps_from_times, num, read_table
 from mimika.io.gaps import fill_gaps
@@ -45,9 +45,11 @@ _TWO_DECIMALS = re.compile(r"^\s*\d+(\.\d{1,2})?\s*$")
 
 # -- writing --------------------------------------------------------------------------------------
 def _fold(track: AUTrack) -> dict[str, np.ndarray]:
-    """Bilateral values: AUxx + mean(AUxxL, AUxxR), clipped."""
+    """Bilateral values: AUxx + mean(AUxxL, AUxxR), clipped (body channels: no column)."""
     out: dict[str, np.ndarray] = {}
     for c in track.channels:
+        if is_body(c):
+            continue
         b = c[:4]
         v = track[c].astype(np.float64)
         out[b] = out.get(b, np.zeros(track.n_frames)) + (v if len(c) == 4 else v / 2)
