@@ -255,7 +255,8 @@ def register(sub) -> None:
                         "video, OpenFace image sequences)")
     p.add_argument("--scale", choices=("auto", "5", "1"),
                    help="OpenFace AUxx_r scale: 5 (OpenFace), 1 (already 0–1, e.g. FACSvatar), "
-                        "auto (default: 5 if any value exceeds 1)")
+                        "auto (default: 5 if any value exceeds 1 or all have OpenFace's 2 "
+                        "decimals)")
     p.add_argument("--timecodes", choices=("strict", "repair"),
                    help="Live Link: refuse (default) or repair rows out of order, duplicates "
                         "and long gaps")

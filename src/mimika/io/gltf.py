@@ -302,9 +302,10 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
     if not nodes[1]["children"]:
         del nodes[1]["children"]
     animated = track is not None and track.n_frames > 0
-    for ni, _names in morph_nodes:
-        if animated and "skin" in nodes[ni]:
-            nodes[ni]["name"] = f"{nodes[ni]['name']}_morphs"
+    if animated:  # Blender names the empty it leaves after the node, the mesh after the mesh
+        for ni, _ in morph_nodes:
+            if "skin" in nodes[ni]:
+                nodes[ni]["name"] = f"{nodes[ni]['name']}_morphs"
 
     doc: dict[str, Any] = {
         "asset": {"version": "2.0", "generator": f"mimika {mimika.__version__}"},

@@ -160,8 +160,8 @@ def read_livelink_csv(path: str | os.PathLike, *, timecode_fps: float | None = N
     """Read a Live Link Face take into an AU track.
 
     ``timecode_fps``: the timecode clock (default: inferred as Epic's importer does — 60 if a
-    frame number exceeds 30, else 30). Rows sit on a regular grid of the clock (the median row
-    step); missing rows and drop-outs are filled with ``fill``. ``timecodes`` ``"strict"``
+    frame number exceeds 30, else 30). Each row sits a whole number of row steps (the lower
+    median step) after the previous one; missing rows and drop-outs are filled with ``fill``. ``timecodes`` ``"strict"``
     refuses rows out of order and gaps over ``max_gap`` seconds; ``"repair"`` sorts, drops
     duplicates and keeps the longest stretch. ``meta``: ``dropouts``, ``missing_rows``,
     ``filled``, ``timecode_start``, ``timecode_fps``, ``notes`` and ``arkit_extra`` (the
