@@ -1,7 +1,8 @@
 """Every file reader of mimika.io turns malformed input into one MimikaError with a place —
-never another exception. Seeded mutations of small valid files (a bounded smoke test; the
-hypothesis fuzz suite runs the large numbers)."""
+never another exception. Seeded mutations of small valid files: a bounded smoke test
+(``MIMIKA_FUZZ_CASES=3000`` runs more per reader; the hypothesis suite runs the large numbers)."""
 
+import os
 import random
 
 import numpy as np
@@ -69,7 +70,7 @@ def test_mutated_files_give_mimika_errors_only(tmp_path, kind):
     rng = random.Random(f"mimika-{kind}")
     suffix = ".json" if kind in ("weights.json", "rhubarb") else ".csv"
     outcomes = {"ok": 0, "error": 0}
-    for i in range(150):
+    for i in range(int(os.environ.get("MIMIKA_FUZZ_CASES", 150))):
         p = tmp_path / f"m{i}{suffix}"
         p.write_text(mutate(text, rng), encoding="utf-8", errors="surrogatepass")
         try:
