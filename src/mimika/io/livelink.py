@@ -161,8 +161,9 @@ def read_livelink_csv(path: str | os.PathLike, *, timecode_fps: float | None = N
 
     ``timecode_fps``: the timecode clock (default: inferred as Epic's importer does — 60 if a
     frame number exceeds 30, else 30). Each row sits a whole number of row steps (the lower
-    median step) after the previous one; missing rows and drop-outs are filled with ``fill``. ``timecodes`` ``"strict"``
-    refuses rows out of order and gaps over ``max_gap`` seconds; ``"repair"`` sorts, drops
+    median step) after the previous one; missing rows and drop-outs are filled with
+    ``fill``. ``timecodes`` ``"strict"`` refuses rows out of order and gaps over ``max_gap``
+    seconds; ``"repair"`` sorts, drops
     duplicates and keeps the longest stretch. ``meta``: ``dropouts``, ``missing_rows``,
     ``filled``, ``timecode_start``, ``timecode_fps``, ``notes`` and ``arkit_extra`` (the
     channels no AU carries, for :func:`write_livelink_csv`).
