@@ -341,3 +341,17 @@ def test_character_glb_skinning_reproduces_the_rig(character):
             got += wts[:, k, None] * (np.einsum("nij,nj->ni", m[:, :, :3], v) + m[:, :, 3])
         err = np.abs(got - want[o.name]).max()
         assert err < 0.01, f"{o.name}: {err:.3f} cm"
+
+
+def test_character_glb_imports_in_blender(character_glb):
+    from tests.blender_app import blender_import, needs_blender
+
+    if needs_blender.args[0]:
+        pytest.skip(needs_blender.kwargs["reason"])
+    rep = blender_import(character_glb, mimika_timing=True)
+    assert rep["scene"]["fps"] == 5 and rep["scene"]["frame_end"] == 1
+    arm = rep.objects("ARMATURE")
+    assert len(arm) == 1
+    skin = rep.object("skin")
+    assert {"AU12", "AU45"} <= set(skin["shape_keys"]) and len(skin["vertex_groups"]) == 18
+    assert rep.object("clothes")["type"] == "MESH" and len(rep["images"]) >= 3

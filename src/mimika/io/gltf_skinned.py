@@ -40,6 +40,7 @@ from mimika.io.gltf import (
     _normals,
     _quat,
     _srgb_to_linear,
+    timing_extras,
 )
 from mimika.tracks import AUTrack
 
@@ -208,7 +209,15 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
         doc["samplers"] = [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071,
                             "wrapT": 33071}]
     if track is not None and track.n_frames:
+        # Blender turns an animated skinned node into an empty named like the node plus a
+        # mesh object named like the mesh: name the node apart so the mesh keeps its name
+        for ni, _ in morph_nodes:
+            if "skin" in nodes[ni]:
+                nodes[ni]["name"] = f"{nodes[ni]['name']}_morphs"
+        timing = timing_extras(track)
+        doc["scenes"][0]["extras"] = timing
         doc["animations"] = [_animation(b, rig, track, morph_nodes, eye_nodes)]
+        doc["animations"][0]["extras"] = dict(timing)
     doc["accessors"] = b.accessors
     doc["bufferViews"] = b.views
     while len(b.bin) % 4:
