@@ -202,7 +202,8 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
         "scenes": [{"name": name or rig.head.name, "nodes": roots}],
         "nodes": nodes, "meshes": meshes, "materials": mats.materials, "skins": [skin],
         "extras": {"units": "metres (character modelled in cm)", "aus": codes,
-                   "character": rig.head.meta.get("character", rig.head.name)},
+                   "character": rig.head.meta.get("character", rig.head.name),
+                   "rig": rig_description(rig)},
     }
     if mats.textures:
         doc["images"], doc["textures"] = mats.images, mats.textures
@@ -224,6 +225,27 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
         b.bin.append(0)
     doc["buffers"] = [{"byteLength": len(b.bin)}]
     return doc, bytes(b.bin)
+
+
+def rig_description(rig: Any) -> dict[str, Any]:
+    """How AU values move the joints, for players that drive the skeleton themselves (the
+    studio): each joint's local rotation (rotation vector, rad, world axes at bind) is
+    ``rest[joint] + share[joint] · Σ value·head_rot[AU] + Σ value·body[channel][joint]``;
+    eyes turn by ``Σ value·eye_rot[AU]``; ``head_translate_m[AU]`` moves ``translate_joint``."""
+    sk = rig.skinning
+
+    def r(v: Any) -> list[float]:
+        return [round(float(x), 6) for x in np.asarray(v, float)]
+
+    return {
+        "rest": {k: r(v) for k, v in sk.rest_pose.items()},
+        "head_share": {k: float(v) for k, v in sk.head_share.items()},
+        "head_rot": {c: r(v) for c, v in rig._head_rot.items()},
+        "head_translate_m": {c: r(np.asarray(v) * SCALE) for c, v in rig._head_tr.items()},
+        "translate_joint": sk.translate_bone,
+        "eye_rot": {c: r(v) for c, v in rig._eye_rot.items()},
+        "body": {c: {b: r(v) for b, v in bones.items()} for c, bones in sk.body.items()},
+    }
 
 
 def _top4(w: Any) -> tuple[np.ndarray, np.ndarray]:
