@@ -1,4 +1,5 @@
-"""The heads mimika can animate, by name or path: ``builtin``, ``ict``, an ICT folder, an OBJ."""
+"""The heads mimika can animate, by name or path: ``builtin``, ``ict``, an ICT folder, a glTF /
+GLB / VRM character, an OBJ."""
 
 from __future__ import annotations
 
@@ -56,8 +57,10 @@ def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None 
     ``ict`` — the ICT Face Model from ``MIMIKA_ICT_DIR`` with its BlendshapeRig; a directory —
     an ICT-FaceKit checkout; an ``.obj`` file — a face mesh in mimika's frame (cm, y up,
     facing +z) driven by the built-in fields (AUs are fields over space, so any similar face
-    mesh deforms). ``identity`` (ICT heads only): an identity mode 0–9 or a sequence of mode
-    weights (see :func:`mimika.face.heads.ict.identity_weights`).
+    mesh deforms); a ``.glb``/``.gltf``/``.vrm`` file — any character, its morphs mapped to AUs
+    and the rest from fields (:mod:`mimika.face.heads.gltf`). ``identity`` (ICT heads only):
+    an identity mode 0–9 or a sequence of mode weights (see
+    :func:`mimika.face.heads.ict.identity_weights`).
     """
     s = str(spec)
     is_ict = s == "ict" or Path(s).is_dir()
@@ -79,6 +82,12 @@ def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None 
         rig = load_ict_rig(None if s == "ict" else s, identity)
         return rig.head, rig
     p = Path(s)
+    if p.suffix.lower() in (".glb", ".gltf", ".vrm"):
+        if fields is not None:
+            raise ParameterError("--fields applies to field-rigged heads, not a glTF character")
+        from mimika.face.heads.gltf import load_gltf_head
+
+        return load_gltf_head(p)
     if p.suffix.lower() == ".obj":
         if not p.is_file():
             raise DataError(f"mesh file {p} does not exist")
@@ -87,6 +96,7 @@ def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None 
         head = head_from_obj(p)
         return head, _field_rig(head, fields)
     raise DataError(
-        f"unknown head {s!r}: use 'builtin', 'ict', an ICT-FaceKit folder or an .obj file "
+        f"unknown head {s!r}: use 'builtin', 'ict', an ICT-FaceKit folder, a glTF/GLB/VRM "
+        "character or an .obj file "
         "(run 'mimika heads')"
     )

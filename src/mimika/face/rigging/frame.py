@@ -8,8 +8,9 @@ The rule (reported by ``mimika heads --inspect`` and ``mimika rig``):
 2. **Orientation** — start from the file's convention (glTF/VRM 1.0: y up, face toward +z;
    VRM 0.x: toward −z; OBJ: each of y-up and z-up with the face toward ±x or ±z is tried);
    the eye and mouth openings found there (:mod:`~mimika.face.rigging.features`) then set the
-   exact frame: x from the right eye to the left eye, y from the mouth up to the eyes, z = x × y
-   toward the viewer.
+   exact frame: x from the right eye to the left eye; y the convention's up made square to x,
+   unless the eyes-to-mouth line disagrees with it by more than 25° (then y follows that line,
+   leaning back 5°); z = x × y, toward the viewer. Turns under 3° are ignored.
 3. **Position** — the midpoint between the eyes moves to (0, 3.5, 8.9) cm, where the ICT and
    built-in heads have it.
 """
@@ -107,6 +108,16 @@ def _exact(feat: FaceFeatures) -> np.ndarray:
     return np.stack([x, y, np.cross(x, y)])
 
 
+#: rotations smaller than this are taken as the file's convention (asymmetric openings)
+SNAP_DEG = 3.0
+
+
+def _snap(r: np.ndarray, r0: np.ndarray) -> np.ndarray:
+    """``r0`` when ``r`` differs from it by less than SNAP_DEG, else ``r``."""
+    c = (np.trace(r @ r0.T) - 1) / 2
+    return r0 if np.degrees(np.arccos(np.clip(c, -1, 1))) < SNAP_DEG else r
+
+
 def _unit(distance_cm: float, unit: str) -> tuple[float, str, str | None]:
     """cm per file unit: the stated unit unless the eye distance says otherwise."""
     s = _UNITS[unit]
@@ -134,7 +145,7 @@ def detect_frame(v: np.ndarray, f: np.ndarray, *, kind: str = "obj", unit: str =
         raise DataError(f"{where}: no face found (no pair of eye openings above a mouth); "
                         "give its landmarks with --landmarks FILE (see docs/avatars.md)")
     _, r0, feat = best
-    r = _exact(feat) @ r0
+    r = _snap(_exact(feat) @ r0, r0)
     feat = find_face(v @ r.T, f) or feat
     s, unit_name, note = _unit(feat.eye_distance * _UNITS[unit], unit)
     t = EYE_MID_CM - s * 0.5 * (feat.eye_L + feat.eye_R)
@@ -156,7 +167,7 @@ def frame_from_points(points: dict[str, np.ndarray], unit: str, where: str) -> F
         raise DataError(f"{where}: landmarks need eye_L, eye_R and mouth (missing {e})") from None
     empty = np.zeros((0, 3))
     feat = FaceFeatures(el, er, m, empty, empty, empty, 1.0, "points")
-    r = _exact(feat)
+    r = _snap(_exact(feat), np.eye(3))
     s, unit_name, note = _unit(feat.eye_distance * _UNITS[unit], unit)
     t = EYE_MID_CM - s * r @ (0.5 * (el + er))
     fr = Frame(s, r, t, None, unit_name, [note] if note else [])
