@@ -2,6 +2,7 @@
 
 #: command modules in the order ``mimika --help`` lists them
 MODULES = (
-    "catalogue", "pose", "knowledge", "speech", "timeline", "fit", "learn", "gan", "studio",
+    "catalogue", "pose", "knowledge", "speech", "timeline", "fit", "avatar", "learn", "gan",
+    "studio",
     "news", "batch",
 )

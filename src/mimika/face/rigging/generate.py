@@ -15,7 +15,7 @@ import numpy as np
 from mimika.face.fitting.shapes import shape_fields
 from mimika.face.fitting.transfer import transfer_fields
 from mimika.face.head import Head
-from mimika.face.rigs.field import FieldRig
+from mimika.face.rigs.field import FieldSet, LinearField, SplitField
 
 __all__ = ["ARKIT_SUMS", "Shapes", "generate_shapes", "shape_document", "template_landmarks"]
 
@@ -45,12 +45,58 @@ def available() -> tuple[str, ...]:
     return (*shape_document()["shapes"], *ARKIT_SUMS)
 
 
+def _support(f: LinearField, eps: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Boxes (lo, hi) in field coordinates outside which ``f`` moves points less than
+    ``eps`` (field units): each Gaussian to where it falls below eps, each RBF centre to 4σ."""
+    boxes = []
+    for g in f.gaussians:
+        r = np.sqrt(2 * np.log(max(abs(g.eta), eps) / eps)) * np.sqrt(np.diag(np.linalg.inv(
+            g.B)))
+        boxes.append((g.mean - r, g.mean + r))
+    if f.rbf is not None:
+        r = 4.0 * f.rbf.sigma
+        boxes.append((f.rbf.centers.min(0) - r, f.rbf.centers.max(0) + r))
+    return boxes
+
+
+def _field_on(fs: FieldSet, field: LinearField | SplitField, upper: np.ndarray | None,
+              v: np.ndarray, eps: float) -> np.ndarray:
+    """Displacements (cm) of ``field`` at points ``v``, evaluated only inside its support
+    (FieldRig.field_at, culled for large meshes); ``upper``: split weights of the points."""
+    u = fs.to_u(v)
+    out = np.zeros_like(u)
+    halves = ((field, None),) if isinstance(field, LinearField) else (
+        (field.upper, upper), (field.lower, None if upper is None else 1.0 - upper))
+    for f, w in halves:
+        if f is None:
+            continue
+        sel = np.zeros(len(u), bool)
+        for lo, hi in _support(f, eps):
+            sel |= np.all((u >= lo) & (u <= hi), axis=1)
+        if w is not None:
+            sel &= w > 0
+        if sel.any():
+            d = f(u[sel])
+            out[sel] += d if w is None else d * w[sel, None]
+    return fs.to_head(out)
+
+
 def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
     """Deltas of shapes ``names`` (default: all available) on every object of ``head`` that
-    their fields move (face category per vertex, teeth rigidly by side of the mouth)."""
+    their fields move: face objects per vertex; rigid objects (teeth, tongue) take one side of
+    the mouth split — the side most of their vertices lie on (the FieldRig uses the centroid,
+    which puts long upper teeth below the lips)."""
     doc = transfer_fields(shape_document(), head)
     fs = shape_fields(doc, source="ict_shape_fields.json")
-    rig = FieldRig(head, fs)
+    eps = 1e-4 / fs.scale  # 1 µm
+    upper = {}
+    for sname, sp in fs.splits.items():
+        for o in head.objects:
+            v = o.vertices.astype(float)
+            w = sp.upper_weight(v)
+            # rigid objects (teeth rows, tongue) go whole, by where most of them lies
+            upper[sname, o.name] = w if o.category == "face" else np.full(
+                len(v), float(w.mean() > 0.5))
     want = list(available() if names is None else names)
     base = {n for w in want for n in ARKIT_SUMS.get(w, (w,))}
     out: Shapes = {}
@@ -59,10 +105,13 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
             raise KeyError(name)
         per = {}
         for o in head.objects:
-            if o.category in fs.linear[name]:
-                d = rig.field_at(name, o.name, o.vertices).astype(np.float32)
-                if np.abs(d).max() > 1e-6:
-                    per[o.name] = d
+            f = fs.linear[name].get(o.category)
+            if f is None:
+                continue
+            w = None if isinstance(f, LinearField) else upper[f.split, o.name]
+            d = _field_on(fs, f, w, o.vertices.astype(float), eps).astype(np.float32)
+            if np.abs(d).max() > 1e-6:
+                per[o.name] = d
         out[name] = per
     for total, parts in ARKIT_SUMS.items():
         if total in want:
