@@ -8,8 +8,8 @@ from scipy.spatial import cKDTree
 
 from mimika.errors import ParameterError
 from mimika.face import Head
-from mimika.face.heads import builtin
 from mimika.face import meshgen as mg
+from mimika.face.heads import builtin
 from mimika.face.heads.builtin import build_builtin_head
 
 RES = (0, 1, 2)

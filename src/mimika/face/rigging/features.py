@@ -87,18 +87,30 @@ def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
     for comp in _components(n, boundary, on_b):
         if len(comp) >= 6:
             out.append(_make(v, comp))
-    # cavities: vertices hidden behind the surface in front of them (a z-buffer of splats)
-    lens = np.linalg.norm(v[uniq[:, 0]] - v[uniq[:, 1]], axis=1)
-    h = 1.5 * float(np.median(lens)) if len(lens) else 1.0
-    lo = v[:, :2].min(0)
-    cell = np.floor((v[:, :2] - lo) / h).astype(np.int64)
+    # cavities: vertices hidden behind the surface in front of them — a z-buffer of points
+    # sampled over every triangle (spacing h, ~300 000 samples over the whole surface)
+    tri = v[f]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    h = float(np.sqrt(max(area.sum(), 1e-12) / 3e5))
+    k = np.minimum(np.ceil(np.sqrt(2 * area) / h).astype(np.int64), 64)  # samples per edge
+    pts = [v]
+    for kk in np.unique(k[k > 1]):
+        a, b = np.meshgrid(np.arange(kk + 1), np.arange(kk + 1))
+        keep = a + b <= kk
+        w = np.c_[a[keep], b[keep]] / kk  # barycentric (w1, w2)
+        t = tri[k == kk]
+        pts.append((t[:, None, 0] + w[None, :, :1] * (t[:, None, 1] - t[:, None, 0])
+                    + w[None, :, 1:] * (t[:, None, 2] - t[:, None, 0])).reshape(-1, 3))
+    pts = np.concatenate(pts)
+    lo = pts[:, :2].min(0)
+    cell = np.floor((pts[:, :2] - lo) / h).astype(np.int64)
     nx = int(cell[:, 0].max()) + 1
     key = cell[:, 1] * nx + cell[:, 0]
     zbuf = np.full(int(key.max()) + 1, -np.inf)
-    np.maximum.at(zbuf, key, v[:, 2])
-    depth = zbuf[key] - v[:, 2]
+    np.maximum.at(zbuf, key, pts[:, 2])
+    depth = zbuf[key[:n]] - v[:, 2]
     span = float(np.ptp(v[:, 2])) or 1.0
-    front = depth <= 2.0 * h
+    front = depth <= 3.0 * h
     hidden = ~front & (depth < 0.12 * span)
     if hidden.any():
         # rim = front-most (visible) vertices next to hidden ones
