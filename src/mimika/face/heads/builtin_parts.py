@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from mimika.face import meshgen as mg
+from mimika.face.eyeball import eyeball_object
 from mimika.face.head import MeshObject, Part
 from mimika.face.heads.builtin_skin import params, shape
 
@@ -15,42 +14,12 @@ from mimika.face.heads.builtin_skin import params, shape
 def eyeball(side: int, res: int) -> MeshObject:
     ey = params()["eyes"]
     sc = params()["grid"]["resolution_scale"][res]
-    R = ey["radius"]
-    c = np.array(ey["centre"], float) * [side, 1, 1]
-    th_p = np.arcsin(ey["pupil_radius"] / R)
-    th_i = np.arcsin(ey["iris_radius"] / R)
-    n_p, n_i, n_s = (max(1, round(k * sc)) for k in ey["rings"])
-    th = np.concatenate([np.linspace(0, th_p, n_p + 1)[1:], np.linspace(th_p, th_i, n_i + 1)[1:],
-                         np.linspace(th_i, np.pi, n_s + 1)[1:-1]])
-    nl = max(12, round(ey["n_lon"] * sc))
-    ph = np.linspace(0, 2 * np.pi, nl, endpoint=False)
-    TH, PH = np.meshgrid(th, ph, indexing="ij")
-    rho = R * np.sin(TH)
-    z = R * np.cos(TH)
-    # flattened, slightly concave iris disc
-    zi = R * np.cos(th_i) - ey["iris_depth"] * (1 - (rho / (R * np.sin(th_i))) ** 2)
-    z = np.where(th_i + 1e-9 >= TH, zi, z)
-    pts = np.stack([rho * np.cos(PH), rho * np.sin(PH), z], -1).reshape(-1, 3)
-    front = np.array([[0, 0, R * np.cos(th_i) - ey["iris_depth"]]])
-    back = np.array([[0, 0, -R]])
-    v = np.concatenate([front, pts, back]) + c
-    rings = [1 + k * nl + np.arange(nl) for k in range(len(th))]
-    last = len(v) - 1
-    faces = [np.stack([rings[0], np.roll(rings[0], -1), np.zeros(nl, int)], 1)]
-    for r0, r1 in itertools.pairwise(rings):
-        faces.append(np.concatenate([np.stack([r0, r1, np.roll(r1, -1)], 1),
-                                     np.stack([r0, np.roll(r1, -1), np.roll(r0, -1)], 1)]))
-    faces.append(np.stack([rings[-1], np.full(nl, last), np.roll(rings[-1], -1)], 1))
-    # orient outward
-    tmp = np.concatenate(faces)
-    if mg.signed_volume(v - c, tmp) < 0:
-        faces = [f[:, ::-1] for f in faces]
-    pupil = np.concatenate(faces[: n_p])
-    iris = np.concatenate(faces[n_p : n_p + n_i])
-    sclera = np.concatenate(faces[n_p + n_i :])
-    name = "eye_L" if side > 0 else "eye_R"
-    return MeshObject(name, "eyes", v, (Part("sclera", sclera), Part("iris", iris),
-                                        Part("pupil", pupil)), pivot=c)
+    rings = tuple(max(1, round(k * sc)) for k in ey["rings"])
+    return eyeball_object("eye_L" if side > 0 else "eye_R",
+                          np.array(ey["centre"], float) * [side, 1, 1], ey["radius"],
+                          pupil_radius=ey["pupil_radius"], iris_radius=ey["iris_radius"],
+                          iris_depth=ey["iris_depth"], rings=rings,
+                          n_lon=max(12, round(ey["n_lon"] * sc)))
 
 
 def teeth(which: str, res: int) -> MeshObject:

@@ -255,9 +255,21 @@ class BlendshapeRig(Rig):
                 head_t += v * self._head_tr[code]
         if eye_rv.any():
             self._apply_eyes(out[None], eye_rv[None])
-        if head_rv.any() or head_t.any():
-            self._apply_head(out[None], head_rv[None], head_t[None])
+        chk = self.check(aus) if self.body_channels else {}
+        body = np.array([[chk.get(c, 0.0) for c in self.body_channels]], np.float64)
+        self._move(out[None], head_rv[None], head_t[None], body)
         return {n: out[s] for n, s in self._slices.items()}
+
+    #: body channels (``body.breath`` …) this rig moves; values reach :meth:`_move`
+    body_channels: tuple[str, ...] = ()
+
+    def _move(self, buf: np.ndarray, rv: np.ndarray, tr: np.ndarray,
+              body: np.ndarray | None = None) -> None:
+        """Head motion, applied last to all objects in place: buf (T, N, 3), head rotation
+        vectors rv (T, 3), translations tr (T, 3) and body channel values (T, B) in the
+        order of :attr:`body_channels`. Rigs with a skeleton override this."""
+        if np.any(rv) or np.any(tr):
+            self._apply_head(buf, rv, tr)
 
     def _apply_eyes(self, buf: np.ndarray, rv: np.ndarray) -> None:
         """In place on buf (T, N, 3): rotate each eyeball by rv (T, 3) about its pivot."""
@@ -338,6 +350,10 @@ class BlendshapeRig(Rig):
         used = np.flatnonzero(np.any(x > 0, axis=0))
         dm = self.delta_matrix[used]
         eye_rv, head_rv, head_tr = vals @ eye, vals @ head, vals @ trans
+        body = np.zeros((len(vals), len(self.body_channels)))
+        for j, c in enumerate(self.body_channels):
+            if c in chans:
+                body[:, j] = vals[:, chans.index(c)]
         t_all = len(vals)
         out = np.empty((t_all, len(self._rest), 3), np.float32)
         for t0 in range(0, t_all, _CHUNK):
@@ -351,6 +367,5 @@ class BlendshapeRig(Rig):
                     flat[:, a:b] += d[:, c:c + b - a]
             if np.any(eye_rv[t0:t1]):
                 self._apply_eyes(buf, eye_rv[t0:t1])
-            if np.any(head_rv[t0:t1]) or np.any(head_tr[t0:t1]):
-                self._apply_head(buf, head_rv[t0:t1], head_tr[t0:t1])
+            self._move(buf, head_rv[t0:t1], head_tr[t0:t1], body[t0:t1])
         return {n: out[:, s] for n, s in self._slices.items()}
