@@ -6,7 +6,10 @@ teeth and tongue are ``teeth``; the rest ``face``), brought into mimika's frame 
 (:mod:`mimika.face.morphs`: FACS, ARKit-52, Oculus visemes, VRM expressions) and AUs no morph
 covers fall back to seed-002 fields carried onto the mesh by its landmarks
 (:mod:`mimika.face.rigging.assemble`). Head AUs follow the skin's head bone where there is one.
-Materials keep their base colour, textures and alpha mode in ``head.meta["materials"]``.
+Each part carries its material's base colour as a texture (the image times the colour factor,
+or a 1×1 image of the factor) with the glTF alpha mode; the renderer's material (skin, lips,
+sclera …, chosen by name) gives the shading. Normal maps are kept, unused, in
+``head.meta["materials"]``.
 """
 
 from __future__ import annotations
@@ -19,8 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from mimika.errors import DataError
-from mimika.face.head import Head, MeshObject, Part
-from mimika.face.heads.gltf_scene import GltfScene, SceneMesh, read_gltf
+from mimika.face.head import Head, MeshObject, Part, Texture
+from mimika.face.heads.gltf_scene import GltfScene, SceneMaterial, SceneMesh, read_gltf
 from mimika.face.morphs import MorphMatch, classify
 from mimika.face.rigging.assemble import AvatarRig, build_rig, head_anchors
 from mimika.face.rigging.features import find_face
@@ -45,13 +48,41 @@ _RENDER_KEYS = (("cornea", "cornea"), ("pupil", "pupil"), ("iris", "iris"),
 
 
 def render_material(name: str, category: str) -> str:
-    """The renderer's material for a glTF material ``name`` (until textured materials reach
-    the renderer): by the words in it, else skin for face objects, sclera for eyes."""
+    """The renderer's material (its shading: skin, lips, sclera …) for a glTF material
+    ``name``: by the words in it, else skin for face objects, sclera for eyes."""
     low = name.lower().replace("_", "").replace(" ", "")
     for word, key in _RENDER_KEYS:
         if word in low:
             return key
     return {"eyes": "sclera", "teeth": "teeth"}.get(category, "skin")
+
+
+_ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
+#: renderer materials whose texture alpha is a gloss map, not opacity
+_GLOSS_ALPHA = ("skin", "lips")
+
+
+def _texture(mat: SceneMaterial, key: str) -> tuple[Texture, str]:
+    """The part's texture — the base-colour image times the base-colour factor, or a 1×1
+    image of the factor — and its alpha mode (glTF OPAQUE | MASK | BLEND)."""
+    f = np.asarray(mat.base_color, float)
+    img = mat.base_color_image
+    if img is None:
+        img = np.ones((1, 1, 4))
+    else:
+        img = img.astype(float) / 255.0
+        if img.shape[2] == 3:
+            img = np.concatenate([img, np.ones((*img.shape[:2], 1))], axis=2)
+        rgb = img[..., :3]
+        img[..., :3] = np.where(rgb <= 0.04045, rgb / 12.92, ((rgb + 0.055) / 1.055) ** 2.4)
+    img = img * f  # linear colour × factor, alpha × factor
+    rgb = np.clip(img[..., :3], 0, 1)
+    img[..., :3] = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * rgb ** (1 / 2.4) - 0.055)
+    mode = _ALPHA.get(mat.alpha_mode.upper(), "opaque")
+    if mode == "opaque" or key in _GLOSS_ALPHA:
+        img = img[..., :3]
+        mode = "opaque" if key in _GLOSS_ALPHA else mode
+    return Texture(np.round(np.clip(img, 0, 1) * 255).astype(np.uint8), mat.name), mode
 
 
 def _bone(scene: GltfScene, vrm_name: str, pattern: str) -> int | None:
@@ -229,16 +260,21 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
         parts = []
         for k, f in m.primitives:
             mat = scene.materials[k] if 0 <= k < len(scene.materials) else None
-            mname = mat.name if mat else "default"
-            if mat is not None:
-                materials[mname] = mat
-            parts.append(Part(render_material(mname if mat else m.name, cat), f))
+            key = render_material(mat.name if mat else m.name, cat)
+            if mat is None:
+                parts.append(Part(key, f))
+                continue
+            materials[mat.name] = mat
+            tex, mode = _texture(mat, key)
+            parts.append(Part(key, f, tex, mode))
         pivot = None
         if cat == "eyes":
             pivot = _fit_sphere(v)
             side = "eye_L" if pivot[0] > 0 else "eye_R"
             eyes.setdefault(side, pivot)
-        uvs = None if m.uvs is None else np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]]
+        # glTF's v runs down the image, mimika's up; no UVs: the flat colour's 1×1 texture
+        uvs = (np.zeros((len(v), 2)) if m.uvs is None else
+               np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]])
         mesh_objs.append(MeshObject(oname, cat, v.astype(np.float32), tuple(parts), pivot, uvs))
     for side, pt in (("eye_L", frame.features.eye_L), ("eye_R", frame.features.eye_R)):
         eyes.setdefault(side, pt - [0.0, 0.0, 1.2])  # no eye mesh: behind the opening
