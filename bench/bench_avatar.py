@@ -17,12 +17,12 @@ from _common import ict_available, rate, report, single_core
 
 single_core()
 
-import numpy as np  # noqa: E402
-from avatar_accuracy import ict_mesh, mh_mesh, write_obj  # noqa: E402
+import numpy as np
 
-from mimika.face.heads import load_head  # noqa: E402
-from mimika.face.rigging.autorig import rig_mesh  # noqa: E402
-from mimika.face.rigging.export import arkit_shapes, write_rigged  # noqa: E402
+from avatar_accuracy import ict_mesh, mh_mesh, write_obj
+from mimika.face.heads import load_head
+from mimika.face.rigging.autorig import rig_mesh
+from mimika.face.rigging.export import arkit_shapes, write_rigged
 
 
 def subdivide(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
