@@ -11,8 +11,9 @@ rig's own rules) and its generated shapes are compared with the real ones:
   real shape interpolated at the closest point of the original surface.
 
 n = moving vertices (real |Δ| ≥ max(0.1 mm, 5 % of d_max)); d, d_max = mean/max real |Δ|;
-e, e_max = mean/max |generated − real|, all in mm. Writes docs/fit/avatar_accuracy.md (+ .csv)
-and docs/img/avatar_contact_sheet.png.
+e, e_max = mean/max |generated − real|, all in mm; as a diagnostic, the gain (intensity) that
+fits each generated shape best to the real one and e/d_max at that gain. Writes
+docs/fit/avatar_accuracy.md (+ .csv) and docs/img/avatar_contact_sheet*.png.
 
     MIMIKA_ICT_DIR=… python bench/avatar_accuracy.py [--quick]
 """
@@ -140,9 +141,14 @@ def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path) -> tuple[list
         moving = mag >= max(0.01, 0.05 * mag.max())
         err = np.linalg.norm(gen - real_h, axis=1)[moving] * 10
         dm = mag[moving] * 10
+        # diagnostic: the intensity (gain) that fits best, and the error left at that gain
+        g, t = gen[moving], real_h[moving]
+        gain = float((g * t).sum() / max((g * g).sum(), 1e-12))
+        e_gain = np.linalg.norm(gain * g - t, axis=1).mean() * 10
         rows.append({"mesh": name, "shape": shape, "n": int(moving.sum()), "d": dm.mean(),
                      "d_max": dm.max(), "e": err.mean(), "e_max": err.max(),
-                     "e_rel": err.mean() / dm.max()})
+                     "e_rel": err.mean() / dm.max(), "gain": gain,
+                     "e_rel_gain": e_gain / dm.max()})
     info = {"mesh": name, "vertices": len(v), "seconds": secs, "frame": fr.describe(),
             "rig": r, "truth": {s: fr.apply_vector(d) for s, d in truth.items()}}
     return rows, info
@@ -169,11 +175,12 @@ def contact(info: dict, shapes: list[str], out: Path, arkit: bool) -> None:
 
 
 def table(rows: list[dict]) -> str:
-    out = ["| mesh | shape | n | d | d_max | e | e_max | e/d_max |",
-           "|---|---|---|---|---|---|---|---|"]
+    out = ["| mesh | shape | n | d | d_max | e | e_max | e/d_max | best gain | e/d_max at it |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         out.append(f"| {r['mesh']} | {r['shape']} | {r['n']} | {r['d']:.3f} | {r['d_max']:.3f} "
-                   f"| {r['e']:.3f} | {r['e_max']:.3f} | {100 * r['e_rel']:.1f}% |")
+                   f"| {r['e']:.3f} | {r['e_max']:.3f} | {100 * r['e_rel']:.1f}% "
+                   f"| {r['gain']:.2f} | {100 * r['e_rel_gain']:.1f}% |")
     return "\n".join(out)
 
 
