@@ -66,5 +66,5 @@ def register(sub) -> None:
     r.add_argument("-o", "--output", required=True, help="the rigged .glb (or .gltf)")
     r.add_argument("--landmarks", help="JSON with eye_L, eye_R and mouth [x, y, z] in the "
                    "mesh's coordinates, for faces whose eyes and mouth are not found")
-    r.add_argument("--quiet", action="store_true", help="print nothing")
+    r.add_argument("-q", "--quiet", action="store_true", help="print nothing")
     r.set_defaults(func=cmd_rig)

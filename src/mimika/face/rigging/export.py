@@ -21,11 +21,35 @@ def arkit_shapes(shapes: Shapes) -> dict[str, dict[str, np.ndarray]]:
     return {a: shapes[canonical_arkit(a)] for a in ARKIT_52 if canonical_arkit(a) in shapes}
 
 
+def _view(b, arr: np.ndarray) -> int:
+    a = np.ascontiguousarray(arr)
+    while len(b.bin) % 4:
+        b.bin.append(0)
+    b.views.append({"buffer": 0, "byteOffset": len(b.bin), "byteLength": a.nbytes})
+    b.bin += a.tobytes()
+    return len(b.views) - 1
+
+
+def _sparse(b, d: np.ndarray) -> int:
+    """A sparse VEC3 accessor of deltas ``d`` (N, 3): only the vertices that move are stored
+    (a face shape moves a few thousand of a body's vertices)."""
+    ids = np.flatnonzero(np.abs(d).max(1) > 0).astype(np.uint32)
+    vals = d[ids]
+    b.accessors.append({
+        "componentType": 5126, "count": len(d), "type": "VEC3",
+        "min": np.minimum(vals.min(0), 0).astype(float).tolist(),
+        "max": np.maximum(vals.max(0), 0).astype(float).tolist(),
+        "sparse": {"count": len(ids),
+                   "indices": {"bufferView": _view(b, ids), "componentType": 5125},
+                   "values": {"bufferView": _view(b, vals.astype(np.float32))}}})
+    return len(b.accessors) - 1
+
+
 def write_rigged(path: str | Path, rig: Rig, extra: Mapping[str, Mapping[str, np.ndarray]]
                  ) -> tuple[Path, list[str]]:
     """Write ``rig``'s head with its AU morphs plus ``extra`` morphs (name → object → deltas
     in cm) to ``path`` (.glb or .gltf); returns the path and the names of the extra morphs."""
-    from mimika.io.gltf import _ARRAY, _FLOAT, SCALE, _Builder, build_gltf, save_gltf
+    from mimika.io.gltf import SCALE, _Builder, build_gltf, save_gltf
 
     p = Path(path)
     doc, binary = build_gltf(rig, name=p.stem)
@@ -40,8 +64,7 @@ def write_rigged(path: str | Path, rig: Rig, extra: Mapping[str, Mapping[str, np
             continue
         prims = mesh["primitives"]
         targets = list(prims[0].get("targets", []))
-        targets += [{"POSITION": b.add((d * SCALE).astype(np.float32), "VEC3", _FLOAT,
-                                       target=_ARRAY, minmax=True)} for _, d in new]
+        targets += [{"POSITION": _sparse(b, (d * SCALE).astype(np.float32))} for _, d in new]
         for prim in prims:
             prim["targets"] = targets
         names = [*mesh.get("extras", {}).get("targetNames", []), *(n for n, _ in new)]
