@@ -245,7 +245,9 @@ def test_rigged_glb_passes_validator_and_loads_in_three(rigged):
 @pytest.mark.skipif(BLENDER is None, reason="blender is not installed (apt-get install blender)")
 @pytest.mark.slow
 def test_rigged_glb_imports_in_blender(rigged):
-    expr = ("import bpy, json; bpy.ops.wm.read_factory_settings(use_empty=True); "
+    # Debian's Blender 3.4 glTF add-on still uses np.bool (gone since NumPy 1.24): restore it
+    expr = ("import bpy, json, numpy; numpy.bool = bool; "
+            "bpy.ops.wm.read_factory_settings(use_empty=True); "
             f"bpy.ops.import_scene.gltf(filepath={str(rigged)!r}); "
             "keys = [k.name for o in bpy.data.objects if o.type == 'MESH' and o.data.shape_keys "
             "for k in o.data.shape_keys.key_blocks]; print('KEYS', json.dumps(keys))")

@@ -45,6 +45,43 @@ def _sparse(b, d: np.ndarray) -> int:
     return len(b.accessors) - 1
 
 
+def _repack(doc: dict, binary: bytes, b) -> object:
+    """Copy every accessor of ``doc`` into builder ``b``, morph targets as sparse accessors
+    (mimika's export writes them dense: 12 bytes per vertex per AU and side, most of them 0)."""
+    sparse_ids = {t["POSITION"] for m in doc["meshes"] for pr in m["primitives"]
+                  for t in pr.get("targets", [])}
+    views = doc["bufferViews"]
+    new_index = {}
+    for i, acc in enumerate(doc["accessors"]):
+        v = views[acc["bufferView"]]
+        width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}[acc["type"]]
+        dt = {5126: np.float32, 5125: np.uint32, 5123: np.uint16}[acc["componentType"]]
+        raw = np.frombuffer(binary, dt, acc["count"] * width, v["byteOffset"]).reshape(
+            acc["count"], width)
+        if i in sparse_ids:
+            new_index[i] = _sparse(b, raw)
+            continue
+        vi = _view(b, raw)
+        if "target" in v:
+            b.views[vi]["target"] = v["target"]
+        b.accessors.append({**acc, "bufferView": vi})
+        new_index[i] = len(b.accessors) - 1
+    remap = new_index.__getitem__
+    for m in doc["meshes"]:
+        for pr in m["primitives"]:
+            pr["attributes"] = {k: remap(a) for k, a in pr["attributes"].items()}
+            pr["indices"] = remap(pr["indices"])
+            if "targets" in pr:
+                pr["targets"] = [{"POSITION": remap(t["POSITION"])} for t in pr["targets"]]
+    for sk in doc.get("skins", []):
+        sk["inverseBindMatrices"] = remap(sk["inverseBindMatrices"])
+    for an in doc.get("animations", []):
+        for sm in an["samplers"]:
+            sm["input"], sm["output"] = remap(sm["input"]), remap(sm["output"])
+    doc["bufferViews"], doc["accessors"] = b.views, b.accessors
+    return b
+
+
 def write_rigged(path: str | Path, rig: Rig, extra: Mapping[str, Mapping[str, np.ndarray]]
                  ) -> tuple[Path, list[str]]:
     """Write ``rig``'s head with its AU morphs plus ``extra`` morphs (name → object → deltas
@@ -53,8 +90,7 @@ def write_rigged(path: str | Path, rig: Rig, extra: Mapping[str, Mapping[str, np
 
     p = Path(path)
     doc, binary = build_gltf(rig, name=p.stem)
-    b = _Builder()
-    b.bin, b.views, b.accessors = bytearray(binary), doc["bufferViews"], doc["accessors"]
+    b = _repack(doc, binary, _Builder())
     written: list[str] = []
     for mesh in doc["meshes"]:
         obj = mesh["name"]
