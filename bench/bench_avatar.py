@@ -89,10 +89,13 @@ def main() -> int:
         try:
             from mimika.render import Renderer
 
-            with Renderer(head, size=(640, 480)) as ren:
-                pos = rig.deform(frames[0])
-                report("  avatar render 640x480", rate(lambda: ren.render(pos), min_time=2.0),
-                       "frames/s", 25)
+            for name, (h, rg) in (("avatar", (head, rig)),
+                                  ("built-in head (reference)", load_head("builtin"))):
+                with Renderer(h, size=(640, 480)) as ren:
+                    pos = rg.deform({"AU12": 1.0, "AU26": 0.5})
+                    report(f"  {name} render 640x480",
+                           rate(lambda ren=ren, pos=pos: ren.render(pos), min_time=2.0),
+                           "frames/s", 25)
         except Exception as e:  # no EGL here
             print(f"  render: skipped ({e})")
     return 0
