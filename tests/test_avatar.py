@@ -227,6 +227,57 @@ def test_rig_writes_facs_and_arkit_morphs(rigged):
     assert arkit <= names
 
 
+def _renamed_copy(src: Path, dst: Path, rename, extensions=None) -> None:
+    """The file with its morph targets renamed by ``rename(name) -> name``."""
+    from pygltflib import GLTF2
+
+    g = GLTF2().load(str(src))
+    for m in g.meshes:
+        if m.extras and "targetNames" in m.extras:
+            m.extras["targetNames"] = [rename(n) for n in m.extras["targetNames"]]
+    if extensions:
+        g.extensions = extensions(g)
+        g.extensionsUsed = list(g.extensions)
+    g.save_binary(str(dst))
+
+
+def test_arkit_only_character_moves_like_its_facs_morphs(tmp_path, rigged):
+    """The rigged file without its FACS morphs: AUs come from the ARKit morphs through the
+    AU → ARKit table, and give the same motion the FACS morphs (made from them) give."""
+    p = tmp_path / "arkit.glb"
+    _renamed_copy(rigged, p, lambda n: f"x_{n}" if n.startswith("AU") else n)
+    _, facs = load_head(rigged)
+    head, rig = load_head(p)
+    assert head.meta["coverage"]["AU12"] == ("arkit", "mouthSmileLeft, mouthSmileRight")
+    for aus in ({"AU12": 1.0}, {"AU12R": 0.6, "AU04": 1.0}, {"AU27": 0.8, "AU45": 1.0}):
+        a, b = facs.deform(aus)["skin"], rig.deform(aus)["skin"]
+        assert np.abs(a - b).max() <= 1e-4 * max(np.abs(a - head["skin"].vertices).max(), 1)
+
+
+def test_vrm_expression_drives_blink(tmp_path, rigged):
+    """A VRM 1.0 character whose blink is only a VRM expression over two unnamed morphs."""
+    from pygltflib import GLTF2
+
+    names = GLTF2().load(str(rigged)).meshes[0].extras["targetNames"]
+    hide = {"eyeBlinkLeft": "m1", "eyeBlinkRight": "m2"}
+
+    def ext(g):
+        node = next(i for i, n in enumerate(g.nodes) if n.mesh == 0)
+        binds = [{"node": node, "index": names.index(k), "weight": 1.0} for k in hide]
+        return {"VRMC_vrm": {"specVersion": "1.0",
+                             "expressions": {"preset": {"blink": {"morphTargetBinds": binds}}}}}
+
+    p = tmp_path / "blink.vrm"
+    _renamed_copy(rigged, p, lambda n: "x" + n if n.startswith("AU") else hide.get(n, n), ext)
+    _, facs = load_head(rigged)
+    head, rig = load_head(p)
+    assert head.meta["coverage"]["AU45"] == ("arkit", "VRM blink")
+    # no blink morphs by name: this frame comes from the openings, so compare motions
+    a = facs.deform({"AU45": 1.0})["skin"] - facs.head["skin"].vertices
+    b = rig.deform({"AU45": 1.0})["skin"] - head["skin"].vertices
+    assert np.abs(a - b).max() < 0.02 * np.abs(a).max()
+
+
 @pytest.mark.skipif(NODE is None or not (TOOLS / "node_modules" / "gltf-validator").is_dir(),
                     reason="node and tools/node_modules (scripts/setup-node.sh) are needed")
 def test_rigged_glb_passes_validator_and_loads_in_three(rigged):

@@ -112,7 +112,9 @@ class _Reader:
 
         self.path = path
         try:
-            g = GLTF2().load(str(path))
+            with open(path, "rb") as fh:  # .vrm (and misnamed files): decide by the magic
+                binary = fh.read(4) == b"glTF"
+            g = GLTF2().load_binary(str(path)) if binary else GLTF2().load_json(str(path))
             if g is None:
                 raise ValueError("not a glTF file")
             if g.buffers:
