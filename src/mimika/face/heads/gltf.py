@@ -26,14 +26,14 @@ from mimika.face.head import Head, MeshObject, Part, Texture
 from mimika.face.heads.gltf_scene import GltfScene, SceneMaterial, SceneMesh, read_gltf
 from mimika.face.morphs import MorphMatch, classify
 from mimika.face.rigging.assemble import AvatarRig, build_rig, head_anchors
-from mimika.face.rigging.features import find_face
+from mimika.face.rigging.features import find_face, sphere_fit
 from mimika.face.rigging.frame import Frame, detect_frame, frame_from_points
 from mimika.face.rigging.generate import Shapes, template_landmarks
 from mimika.face.rigging.landmarks import landmarks68
 
 log = logging.getLogger(__name__)
 
-__all__ = ["EXTENSIONS", "load_gltf_head", "render_material"]
+__all__ = ["EXTENSIONS", "load_gltf_head", "mesh_category", "render_material"]
 
 EXTENSIONS = (".glb", ".gltf", ".vrm")
 _EYE = re.compile(r"eye(?!brow|lash|line|_?lid|shadow)|iris|pupil|cornea|sclera", re.I)
@@ -95,7 +95,9 @@ def _bone(scene: GltfScene, vrm_name: str, pattern: str) -> int | None:
     return None
 
 
-def _category(m: SceneMesh, scene: GltfScene, eye_bones: set[int]) -> str:
+def mesh_category(m: SceneMesh, scene: GltfScene, eye_bones: set[int]) -> str:
+    """eyes (held by an eye bone, or named/made of eye, iris, pupil …), teeth (teeth, tongue,
+    gums) or face."""
     mats = " ".join(scene.materials[k].name for k, _ in m.primitives if 0 <= k <
                     len(scene.materials))
     if m.joints is not None and eye_bones:
@@ -153,12 +155,6 @@ def _frame(scene: GltfScene, face: SceneMesh, matches: Mapping[int, MorphMatch],
                  fr.unit, [*fr.notes, "frame from the blink and jaw morphs"])
 
 
-def _fit_sphere(p: np.ndarray) -> np.ndarray:
-    from mimika.face.heads.ict import _fit_sphere
-
-    return _fit_sphere(p)[0]
-
-
 def _shapes(scene: GltfScene, objects: list[tuple[SceneMesh, str]], frame: Frame
             ) -> tuple[Shapes, dict[str, str], list[dict]]:
     """Canonical shapes (object → head-frame deltas), their origins and the morph table."""
@@ -171,6 +167,7 @@ def _shapes(scene: GltfScene, objects: list[tuple[SceneMesh, str]], frame: Frame
         origin.setdefault(name, raw)
 
     for m, oname in objects:
+        hv = frame.apply(m.vertices)
         for k, raw in enumerate(m.morph_names):
             mt = classify(raw)
             d = frame.apply_vector(m.morph_deltas[k])
@@ -181,7 +178,7 @@ def _shapes(scene: GltfScene, objects: list[tuple[SceneMesh, str]], frame: Frame
                 continue
             name = mt.name
             if name[-2:] in ("_L", "_R"):
-                x = _centroid(np.zeros((len(d), 3)) + frame.apply(m.vertices), d)[0]
+                x = _centroid(hv, d)[0]
                 if (x < -0.3 and name[-1] == "L") or (x > 0.3 and name[-1] == "R"):
                     name = name[:-1] + ("R" if name[-1] == "L" else "L")
                     row["as"] = name
@@ -234,7 +231,7 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     eye_bones = {b for b in (_bone(scene, "leftEye", r"^(left_?eye|eye_?l(eft)?|l_?eye)$"),
                              _bone(scene, "rightEye", r"^(right_?eye|eye_?r(ight)?|r_?eye)$"))
                  if b is not None}
-    cats = [_category(m, scene, eye_bones) for m in scene.meshes]
+    cats = [mesh_category(m, scene, eye_bones) for m in scene.meshes]
     face_ids = [i for i, c in enumerate(cats) if c == "face"]
     if not face_ids:
         raise DataError(f"{p}: every mesh looks like eyes or teeth; no face mesh to animate")
@@ -269,7 +266,7 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
             parts.append(Part(key, f, tex, mode))
         pivot = None
         if cat == "eyes":
-            pivot = _fit_sphere(v)
+            pivot = sphere_fit(v)[0]
             side = "eye_L" if pivot[0] > 0 else "eye_R"
             eyes.setdefault(side, pivot)
         # glTF's v runs down the image, mimika's up; no UVs: the flat colour's 1×1 texture

@@ -25,6 +25,7 @@ from scipy.sparse.csgraph import connected_components
 from mimika.errors import DataError
 from mimika.face.head import Head, MeshObject, Part
 from mimika.face.rigging.assemble import AvatarRig, build_rig, head_anchors
+from mimika.face.rigging.features import find_face, sphere_fit
 from mimika.face.rigging.frame import Frame, detect_frame, frame_from_points
 from mimika.face.rigging.generate import Shapes, generate_shapes, template_landmarks
 from mimika.face.rigging.landmarks import landmarks68
@@ -87,7 +88,7 @@ def _read(path: Path) -> tuple[list[_Piece], str, int | None]:
         return (_split(m.vertices.astype(float), m.faces.astype(np.int64),
                        m.face_groups, m.groups, m.vertex_uvs(), path.stem), "cm", None)
     if ext in (".glb", ".gltf", ".vrm"):
-        from mimika.face.heads.gltf import _category
+        from mimika.face.heads.gltf import mesh_category
         from mimika.face.heads.gltf_scene import read_gltf
 
         sc = read_gltf(path)
@@ -96,7 +97,7 @@ def _read(path: Path) -> tuple[list[_Piece], str, int | None]:
             parts = [(sc.materials[k].name if 0 <= k < len(sc.materials) else "default", f)
                      for k, f in m.primitives]
             uv = None if m.uvs is None else np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]]
-            pieces.append(_Piece(m.name, m.vertices, parts, uv, _category(m, sc, set())))
+            pieces.append(_Piece(m.name, m.vertices, parts, uv, mesh_category(m, sc, set())))
         pieces.sort(key=lambda p: (p.category != "face", -len(p.vertices)))
         return pieces, "m", sc.vrm_version
     raise DataError(f"{path}: mimika rig reads .obj, .glb, .gltf and .vrm meshes")
@@ -122,15 +123,13 @@ def read_landmarks(path: str | Path) -> dict[str, np.ndarray]:
 def _classify(pieces: list[_Piece], frame: Frame) -> None:
     """Eyeballs: round pieces centred within 2 cm of an eye opening; teeth/tongue: pieces
     whose centre lies in the mouth (within its half-width of the mouth centre, behind it)."""
-    from mimika.face.heads.ict import _fit_sphere
-
     ft = frame.features
     d = ft.eye_distance
     for pc in pieces[1:]:
         if pc.category != "face":
             continue
         v = frame.apply(pc.vertices)
-        c, r = _fit_sphere(v)
+        c, r = sphere_fit(v)
         resid = np.abs(np.linalg.norm(v - c, axis=1) - r).mean() if len(v) > 8 else np.inf
         near_eye = min(np.linalg.norm(c - ft.eye_L), np.linalg.norm(c - ft.eye_R))
         if resid < 0.15 * r and near_eye < 0.35 * d and 0.1 * d < r < 0.35 * d:
@@ -155,8 +154,6 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None) -> Rigged
     faces = np.concatenate([f for _, f in face.parts])
     if landmarks is not None:
         frame = frame_from_points(read_landmarks(landmarks), unit, str(landmarks))
-        from mimika.face.rigging.features import find_face
-
         feat = find_face(frame.apply(face.vertices), faces)
         if feat is not None and np.linalg.norm(feat.eye_L - frame.features.eye_L) < \
                 0.35 * frame.features.eye_distance:
@@ -178,9 +175,7 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None) -> Rigged
         parts = tuple(Part(render_material(m, pc.category), f) for m, f in pc.parts)
         pivot = None
         if pc.category == "eyes":
-            from mimika.face.heads.ict import _fit_sphere
-
-            pivot = _fit_sphere(v)[0]
+            pivot = sphere_fit(v)[0]
             eyes.setdefault("eye_L" if pivot[0] > 0 else "eye_R", pivot)
         objs.append(MeshObject(name, pc.category, v, parts, pivot, pc.uvs))
     skin_v = objs[0].vertices.astype(float)

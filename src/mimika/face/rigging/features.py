@@ -21,7 +21,7 @@ from scipy.sparse.csgraph import connected_components
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FaceFeatures", "find_face", "openings"]
+__all__ = ["FaceFeatures", "find_face", "openings", "sphere_fit"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,13 @@ class _Opening:
 
     def extent(self, axis: np.ndarray) -> float:
         return float(np.ptp(self.points @ axis))
+
+
+def sphere_fit(p: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares sphere (centre (3,), radius) through points (N, 3): eyeball centres."""
+    from mimika.face.heads.ict import _fit_sphere
+
+    return _fit_sphere(p)
 
 
 def _edges(f: np.ndarray) -> np.ndarray:

@@ -8,9 +8,11 @@ from __future__ import annotations
 import functools
 import json
 from collections.abc import Iterable
+from dataclasses import replace
 from importlib import resources
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from mimika.face.fitting.shapes import shape_fields
 from mimika.face.fitting.transfer import transfer_fields
@@ -59,6 +61,13 @@ def _support(f: LinearField, eps: float) -> list[tuple[np.ndarray, np.ndarray]]:
     return boxes
 
 
+def _in_boxes(u: np.ndarray, boxes: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    out = np.zeros(len(u), bool)
+    for lo, hi in boxes:
+        out |= np.all((u >= lo) & (u <= hi), axis=1)
+    return out
+
+
 def _field_on(fs: FieldSet, field: LinearField | SplitField, upper: np.ndarray | None,
               v: np.ndarray, eps: float) -> np.ndarray:
     """Displacements (cm) of ``field`` at points ``v``, evaluated only inside its support
@@ -70,9 +79,11 @@ def _field_on(fs: FieldSet, field: LinearField | SplitField, upper: np.ndarray |
     for f, w in halves:
         if f is None:
             continue
-        sel = np.zeros(len(u), bool)
-        for lo, hi in _support(f, eps):
-            sel |= np.all((u >= lo) & (u <= hi), axis=1)
+        sel = _in_boxes(u, _support(f, eps))
+        if f.rbf is not None:  # the residual: only within 4σ of one of its centres
+            near = np.isfinite(cKDTree(f.rbf.centers).query(
+                u, distance_upper_bound=4.0 * f.rbf.sigma)[0])
+            sel &= near | _in_boxes(u, _support(replace(f, rbf=None), eps))
         if w is not None:
             sel &= w > 0
         if sel.any():
@@ -86,7 +97,10 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
     their fields move: face objects per vertex; rigid objects (teeth, tongue) take one side of
     the mouth split — the side most of their vertices lie on (the FieldRig uses the centroid,
     which puts long upper teeth below the lips)."""
-    doc = transfer_fields(shape_document(), head)
+    full = shape_document()
+    # the shapes are in field coordinates: only the frame, splits and source move
+    doc = transfer_fields({k: v for k, v in full.items() if k != "shapes"}, head)
+    doc["shapes"] = full["shapes"]
     fs = shape_fields(doc, source="ict_shape_fields.json")
     eps = 1e-4 / fs.scale  # 1 µm
     upper = {}
