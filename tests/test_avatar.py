@@ -374,3 +374,14 @@ def test_rig_bad_mesh_is_one_line_exit_2(tmp_path, builtin_small, which, capsys)
     if which == "sphere":
         assert "no face found" in err and "--landmarks" in err
     assert not (tmp_path / "out.glb").exists()
+
+
+def test_studio_and_batch_take_a_character_file(tmp_path, builtin_glb):
+    from mimika.batch.spec import parse_spec
+    from mimika.studio.state import StudioState
+
+    spec = parse_spec({"aus": ["AU12"], "heads": [str(builtin_glb)]})
+    assert spec.heads == (str(builtin_glb.resolve()),)
+    st = StudioState(tmp_path / "projects", head=str(builtin_glb))
+    glb, _ = st.glb()
+    assert glb[:4] == b"glTF" and "AU12" in st.rig().supported
