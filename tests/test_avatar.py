@@ -322,6 +322,14 @@ def test_rig_with_landmarks_file(tmp_path, decimated_head):
     r = rig_mesh(decimated_head, landmarks=p)
     d = r.rig.deform({"AU27": 1.0})["skin"] - r.head["skin"].vertices
     assert d[:, 1].min() < -0.5  # the jaw drops
+    # all 68 given: they are used as they are (nearest vertices)
+    p.write_text(json.dumps({**{k: (v * 0.01).tolist() for k, v in pts.items()},
+                             "landmarks68": (lm * 0.01).tolist()}))
+    r = rig_mesh(decimated_head, landmarks=p)
+    assert np.abs(r.head.landmark_points() - r.frame.apply(lm * 0.01)).max() < 1.0  # coarse
+    p.write_text(json.dumps({"eye_L": [0, 0, 0]}))
+    assert main(["rig", str(decimated_head), "-o", str(tmp_path / "x.glb"), "--landmarks",
+                 str(p)]) == 2
 
 
 # --- bad files: one line, exit 2 --------------------------------------------------------------

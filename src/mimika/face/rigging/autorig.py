@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from mimika.errors import DataError
 from mimika.face.head import Head, MeshObject, Part
@@ -105,18 +106,22 @@ def _read(path: Path) -> tuple[list[_Piece], str, int | None]:
 
 def read_landmarks(path: str | Path) -> dict[str, np.ndarray]:
     """A landmarks file: JSON ``{"eye_L": [x, y, z], "eye_R": …, "mouth": …}`` in the mesh's
-    own coordinates (``eye_L`` is the subject's left eye; ``mouth`` the middle of the lips)."""
+    own coordinates (``eye_L`` is the subject's left eye; ``mouth`` the middle of the lips),
+    optionally ``"landmarks68"``: the 68 Multi-PIE points, used as they are."""
     p = Path(path)
     try:
         doc = json.loads(p.read_text("utf-8"))
         pts = {k: np.asarray(doc[k], float).reshape(3) for k in ("eye_L", "eye_R", "mouth")}
+        if "landmarks68" in doc:
+            pts["landmarks68"] = np.asarray(doc["landmarks68"], float).reshape(68, 3)
     except OSError as e:
         raise DataError(f"cannot read landmarks file {p}: {e.strerror}") from None
     except json.JSONDecodeError as e:
         raise DataError(f"{p}:{e.lineno}:{e.colno}: invalid JSON: {e.msg}") from None
     except (KeyError, TypeError, ValueError) as e:
-        raise DataError(f"{p}: landmarks need eye_L, eye_R and mouth as [x, y, z] "
-                        f"({type(e).__name__}: {e})") from None
+        raise DataError(f"{p}: landmarks need eye_L, eye_R and mouth as [x, y, z] (and "
+                        f"optionally landmarks68: 68 of them) ({type(e).__name__}: {e})"
+                        ) from None
     return pts
 
 
@@ -152,8 +157,11 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None) -> Rigged
     pieces, unit, vrm = _read(p)
     face = pieces[0]
     faces = np.concatenate([f for _, f in face.parts])
+    given = None
     if landmarks is not None:
-        frame = frame_from_points(read_landmarks(landmarks), unit, str(landmarks))
+        pts = read_landmarks(landmarks)
+        given = pts.pop("landmarks68", None)
+        frame = frame_from_points(pts, unit, str(landmarks))
         feat = find_face(frame.apply(face.vertices), faces)
         if feat is not None and np.linalg.norm(feat.eye_L - frame.features.eye_L) < \
                 0.35 * frame.features.eye_distance:
@@ -179,7 +187,11 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None) -> Rigged
             eyes.setdefault("eye_L" if pivot[0] > 0 else "eye_R", pivot)
         objs.append(MeshObject(name, pc.category, v, parts, pivot, pc.uvs))
     skin_v = objs[0].vertices.astype(float)
-    lm_idx, lm_pts = landmarks68(skin_v, frame.features, template_landmarks())
+    if given is not None:
+        _, lm_idx = cKDTree(skin_v).query(frame.apply(given))
+        lm_pts = skin_v[lm_idx]
+    else:
+        lm_idx, lm_pts = landmarks68(skin_v, frame.features, template_landmarks())
     for side, pt in (("eye_L", frame.features.eye_L), ("eye_R", frame.features.eye_R)):
         eyes.setdefault(side, pt - [0.0, 0.0, 1.2])
     head = Head(p.stem, tuple(objs), lm_idx, head_anchors(skin_v, lm_pts, eyes),
