@@ -176,7 +176,8 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None) -> Rigged
     eyes: dict[str, np.ndarray] = {}
     used: dict[str, int] = {}
     for i, pc in enumerate(pieces):
-        base = "skin" if i == 0 else f"{pc.category}_{pc.name}"
+        # OBJ pieces are named after the file: call them by what they are
+        base = "skin" if i == 0 else pc.category if pc.name == p.stem else pc.name
         used[base] = used.get(base, 0) + 1
         name = base if used[base] == 1 else f"{base}.{used[base] - 1}"
         v = frame.apply(pc.vertices).astype(np.float32)
