@@ -15,6 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from mimika.face.fitting.shapes import shape_fields
+from mimika.face.fitting.splits import similarity_transform
 from mimika.face.fitting.transfer import transfer_fields
 from mimika.face.head import Head
 from mimika.face.rigs.field import FieldSet, LinearField, SplitField
@@ -92,6 +93,16 @@ def _field_on(fs: FieldSet, field: LinearField | SplitField, upper: np.ndarray |
     return fs.to_head(out)
 
 
+def _rigid(v: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """The displacement of the rigid motion that best matches ``d`` at points ``v``
+    (Kabsch), so a tooth row or tongue moves as one piece."""
+    if not np.any(d):
+        return d
+    _, r, _ = similarity_transform(v, v + d)  # its rotation; the scale is dropped
+    c = v.mean(0)
+    return (v - c) @ r.T + c + d.mean(0) - v
+
+
 def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
     """Deltas of shapes ``names`` (default: all available) on every object of ``head`` that
     their fields move: face objects per vertex; rigid objects (teeth, tongue) take one side of
@@ -123,7 +134,10 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
             if f is None:
                 continue
             w = None if isinstance(f, LinearField) else upper[f.split, o.name]
-            d = _field_on(fs, f, w, o.vertices.astype(float), eps).astype(np.float32)
+            d = _field_on(fs, f, w, o.vertices.astype(float), eps)
+            if o.category != "face":  # teeth and tongue stay rigid: the best rigid motion
+                d = _rigid(o.vertices.astype(float), d)
+            d = d.astype(np.float32)
             if np.abs(d).max() > 1e-6:
                 per[o.name] = d
         out[name] = per
