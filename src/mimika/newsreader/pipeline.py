@@ -236,7 +236,7 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
 
 
 def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en",
-                head: str = "builtin", layers: Iterable[str] | None = None,
+                head: str | None = None, layers: Iterable[str] | None = None,
                 progress: Progress | None = None, fps: float = 25.0,
                 size: tuple[int, int] = (640, 480), view: str = "front",
                 voice: str | None = None, rate: int = 165, samples: int = 0,
@@ -266,10 +266,10 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     tm: dict[str, float] = {}
     t_all = time.perf_counter()
     if rig is None:
-        from mimika.face.heads import load_head
+        from mimika.face.heads import DEFAULT_HEAD, load_head
 
         t0 = time.perf_counter()
-        _, rig = load_head(head)
+        _, rig = load_head(head or DEFAULT_HEAD)
         tm["load_head"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     if news is None:
@@ -327,11 +327,11 @@ def render_ablations(text: str | Article, *, out_dir: str | os.PathLike, stem: s
                      **kwargs: Any) -> list[NewsResult]:
     """The seed 004 ablation set: all features, then each of :data:`ABLATIONS` switched off,
     as ``{stem}_all.mp4`` and ``{stem}_no-{feature}.mp4`` in ``out_dir`` (one synthesis)."""
-    from mimika.face.heads import load_head
+    from mimika.face.heads import DEFAULT_HEAD, load_head
 
     d = Path(out_dir)
     kwargs.pop("layers", None)
-    _, rig = load_head(kwargs.pop("head", "builtin"))
+    _, rig = load_head(kwargs.pop("head", None) or DEFAULT_HEAD)
     art = parse_article(text) if isinstance(text, str) else text
     lang = kwargs.get("lang", "en")
     utt, paras = speak_article(art, lang=lang, voice=kwargs.get("voice"),

@@ -142,8 +142,8 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
                margin: float = 0.03) -> int:
     """Push skin vertices that poke through ``cloth`` back under it, in place: a vertex whose
     inward ray meets the cloth within ``reach`` (base units) moves inward past it by
-    ``margin``. Returns how many moved. (``delete_verts`` hides most of the covered body;
-    this fixes the edges: collars, cuffs.)"""
+    ``margin``, under every layer. Returns how many moves it made. (``delete_verts`` hides
+    most of the covered body; this fixes the edges: collars, cuffs.)"""
     from scipy.spatial import cKDTree
 
     from mimika.face.meshgen import vertex_normals
@@ -161,13 +161,34 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
     near = np.flatnonzero(kd.query(v, distance_upper_bound=reach * 2)[0] < np.inf)
     moved = 0
     for i in near:
-        cand = kd.query_ball_point(v[i], reach * 3)
-        t = _first_hit(v[i:i + 1], -n[i:i + 1], tri[cand], reach)[0]
-        if np.isfinite(t):
+        for _ in range(4):  # layered clothes (collar over shirt): tuck under each layer
+            cand = kd.query_ball_point(v[i], reach * 3)
+            t = _first_hit(v[i:i + 1], -n[i:i + 1], tri[cand], reach)[0]
+            if not np.isfinite(t):
+                break
             v[i] -= n[i] * (t + margin)
             moved += 1
     skin_piece.vertices = v[inv].astype(np.float32)
     return moved
+
+
+#: skin influences per vertex (what glTF players and game engines take)
+MAX_INFLUENCES = 4
+
+
+def top_influences(w: sp.csr_matrix, k: int = MAX_INFLUENCES) -> sp.csr_matrix:
+    """Keep each row's ``k`` largest weights, renormalised to sum to 1."""
+    dense = np.asarray(w.todense(), np.float64)
+    if dense.shape[1] > k:
+        cut = -np.sort(-dense, axis=1)[:, k - 1:k]
+        dense = np.where(dense >= cut, dense, 0.0)
+        # ties at the cut could leave more than k: keep the first k in bone order
+        over = np.cumsum(dense > 0, axis=1) > k
+        dense[over] = 0.0
+    s = dense.sum(1, keepdims=True)
+    out = sp.csr_matrix(dense / np.where(s > 0, s, 1.0))
+    out.eliminate_zeros()
+    return out
 
 
 @dataclass(frozen=True)
@@ -254,9 +275,7 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
             deltas[p.name] = np.zeros((len(names), len(p.vertices), 3), np.float32)
         else:
             deltas[p.name] = np.stack([p.binding @ d for d in dense]).astype(np.float32)
-        w = sp.csr_matrix(p.binding @ skel.weights)
-        w.eliminate_zeros()
-        weights[p.name] = w
+        weights[p.name] = top_influences(sp.csr_matrix(p.binding @ skel.weights))
     log.debug("character: %d pieces, %d vertices", len(pieces),
               sum(len(p.vertices) for p in pieces))
     return Built(pieces, skel, names, deltas, weights, verts)

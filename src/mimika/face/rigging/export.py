@@ -51,6 +51,9 @@ def _repack(doc: dict, binary: bytes, b) -> object:
     sparse_ids = {t["POSITION"] for m in doc["meshes"] for pr in m["primitives"]
                   for t in pr.get("targets", [])}
     views = doc["bufferViews"]
+    if doc.get("images") or len({a["bufferView"] for a in doc["accessors"]}) != len(views):
+        b.bin, b.views, b.accessors = bytearray(binary), views, doc["accessors"]
+        return b  # views that are not accessors (images): keep the layout as it is
     new_index = {}
     for i, acc in enumerate(doc["accessors"]):
         v = views[acc["bufferView"]]

@@ -220,6 +220,24 @@ class BlendshapeRig(Rig):
             moved[key] = moved.get(key, 0.0) + v
         return split_sides(moved)
 
+    def shape_deltas(self, code: str) -> dict[str, np.ndarray]:
+        """The shape part of AU ``code`` at intensity 1: offsets (N_obj, 3) per object in the
+        rig's own (rest or bind) space, without eye turns or head motion; {} for AUs with
+        no shapes (morph targets of an export)."""
+        c = parse_au(code)
+        b = base_code(c)
+        row = self._row.get(b)
+        if row is None:
+            return {}
+        side = c[4:] or self._bilateral_side.get(b, "")
+        rows = [r for r, s in ((row, "L"), (row + 1, "R")) if side in ("", s)]
+        d = self.delta_matrix[rows].sum(0)
+        flat = np.zeros(len(self._rest) * 3, np.float32)
+        for a, e, col in self._segments:
+            flat[a:e] = d[col:col + e - a]
+        full = flat.reshape(-1, 3)
+        return {n: full[s] for n, s in self._slices.items()}
+
     def deform(self, aus: Mapping[str, float]) -> Positions:
         """Positions per object name, each (N_obj, 3) float32, for AU intensities in [0, 1]."""
         sides = self._sides(aus)

@@ -80,25 +80,30 @@ class SkinnedRig(BlendshapeRig):
             for bone, rv in rot.items():
                 self._body_rv[j, skinning.names.index(bone)] = rv
 
+    def local_rotations(self, head_rv: np.ndarray, body: np.ndarray | None = None
+                        ) -> np.ndarray:
+        """Each bone's rotation vector about its head (T, B, 3): rest pose + its share of the
+        head rotations (T, 3) + body channel values (T, len(body_channels))."""
+        sk = self.skinning
+        out = np.zeros((len(head_rv), len(sk.names), 3))
+        for i, rv in self._rest_local.items():
+            out[:, i] += rv
+        for i, share in self._share.items():
+            out[:, i] += share * np.asarray(head_rv, float)
+        if body is not None and body.size:
+            out += np.einsum("tc,cbk->tbk", body, self._body_rv)
+        return out
+
     def bone_transforms(self, head_rv: np.ndarray, head_tr: np.ndarray,
                         body: np.ndarray | None = None) -> np.ndarray:
         """World transforms (T, B, 3, 4) for head rotations (T, 3), translations (T, 3) and
         body channel values (T, len(body_channels))."""
         sk = self.skinning
         t_all = len(head_rv)
-        nb = len(sk.names)
-        extra = None if body is None or not body.size else np.einsum("tc,cbk->tbk", body,
-                                                                      self._body_rv)
-        out = np.zeros((t_all, nb, 3, 4))
-        for i in range(nb):
-            rv = np.zeros((t_all, 3))
-            if i in self._rest_local:
-                rv += self._rest_local[i]
-            if i in self._share:
-                rv += self._share[i] * head_rv
-            if extra is not None:
-                rv += extra[:, i]
-            rot = _rotations(rv)
+        rvs = self.local_rotations(head_rv, body)
+        out = np.zeros((t_all, len(sk.names), 3, 4))
+        for i in range(len(sk.names)):
+            rot = _rotations(rvs[:, i])
             h = sk.heads[i]
             local = np.zeros((t_all, 3, 4))
             local[:, :, :3] = rot
