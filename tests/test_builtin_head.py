@@ -1,6 +1,5 @@
 """The built-in procedural head: structure a user (and the AU rigs) rely on."""
 
-import time
 
 import numpy as np
 import pytest
@@ -253,20 +252,17 @@ def test_triangle_budget_and_density():
     assert 1.6 < s2 < 2.6
 
 
-def test_deterministic_cached_and_fast():
+def test_deterministic_and_cached():
     a = build_builtin_head(1)
     assert build_builtin_head(1) is a
     build_builtin_head.cache_clear()
-    t = time.perf_counter()
     b = build_builtin_head(1)
-    elapsed = time.perf_counter() - t
     assert b is not a
     for oa, ob in zip(a.objects, b.objects, strict=True):
         np.testing.assert_array_equal(oa.vertices, ob.vertices)
         for pa, pb in zip(oa.parts, ob.parts, strict=True):
             np.testing.assert_array_equal(pa.faces, pb.faces)
     np.testing.assert_array_equal(a.landmarks, b.landmarks)
-    assert elapsed < 2.0  # ~0.4 s on a laptop core; generous for busy CI machines
 
 
 def test_rejects_unknown_resolution():

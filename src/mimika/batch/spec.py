@@ -308,15 +308,15 @@ def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
         path = Path(os.path.expanduser(h))
         if not path.is_absolute() and base is not None:
             path = base / path
-        if path.is_dir() or path.suffix.lower() == ".obj":
+        if path.is_dir() or path.suffix.lower() in (".obj", ".glb", ".gltf", ".vrm"):
             if not path.exists():
                 raise c.error(p, f"head file {str(path)!r} does not exist")
             out.append(str(path.resolve()))
             continue
         close = difflib.get_close_matches(h, ["builtin", "ict"], n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise c.error(p, f"unknown head {h!r}{hint} (use builtin, ict, an ICT-FaceKit folder "
-                         "or an .obj file; run 'mimika heads')")
+        raise c.error(p, f"unknown head {h!r}{hint} (use builtin, ict, an ICT-FaceKit folder, "
+                         "a glTF/GLB/VRM character or an .obj file; run 'mimika heads')")
     if len(set(out)) != len(out):
         raise c.error(("heads",), "a head is listed twice")
     if not out:

@@ -72,6 +72,9 @@ class MeshObject:
     #: (N,) for meshes split at UV seams: the index of the position each vertex was split
     #: from (vertices sharing it get one smooth normal); None when not split
     weld: np.ndarray | None = None
+    #: faces are known to wind counter-clockwise seen from outside (the renderer then does
+    #: not guess the orientation from the object's centre, which fails for open shapes)
+    oriented: bool = False
 
     def __post_init__(self) -> None:
         if self.category not in CATEGORIES:

@@ -161,7 +161,7 @@ class _GpuObject:
                 f"object {obj.name!r}: face indices must be in [0, {obj.n_vertices}), "
                 f"got [{faces.min()}, {faces.max()}]"
             )
-        if _winding_inward(obj.vertices, faces):
+        if not obj.oriented and _winding_inward(obj.vertices, faces):
             log.info("object %r: faces wind clockwise seen from outside; flipping", obj.name)
             faces = faces[:, [0, 2, 1]].copy()
         self.faces = faces
@@ -267,13 +267,16 @@ class Renderer:
         those settings.
     lighting
         Lights and backdrop (:class:`mimika.render.skin.Lighting`); default: mimika's look.
+    hidden
+        Names of objects not to draw (e.g. ``("hair",)``).
 
     The GL context is created on the first :meth:`render`; ``close()`` (or leaving a
     ``with`` block) frees this renderer's GPU objects.
     """
 
     def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4,
-                 skin_shader: Any = False, lighting: Any = None) -> None:
+                 skin_shader: Any = False, lighting: Any = None,
+                 hidden: Any = ()) -> None:
         try:
             w, h = (int(s) for s in size)
         except (TypeError, ValueError):
@@ -287,6 +290,12 @@ class Renderer:
         self.samples = int(samples)
         self.skin_shader = skin_shader
         self.lighting = lighting
+        names = {o.name for o in head.objects}
+        unknown = sorted(set(hidden) - names)
+        if unknown:
+            raise ParameterError(f"hidden: head {head.name!r} has no object {unknown[0]!r}; "
+                                 f"objects: {', '.join(sorted(names))}")
+        self.hidden = frozenset(hidden)
         self._skin: Any = None
         self._cameras: dict[str, Camera] = {}
         self._gl: dict[str, Any] | None = None
@@ -555,7 +564,8 @@ class Renderer:
             gl["attachments"].append(depth)
             gl["fbo"] = gl["resolve"] = ctx.framebuffer(resolve_color, depth)
 
-        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects if o.parts]
+        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects
+                         if o.parts and o.name not in self.hidden]
         if self.skin_shader:
             from mimika.render.skin import DEFAULT_LIGHTING, SkinShader
 

@@ -16,6 +16,7 @@ from importlib import resources
 import numpy as np
 
 from mimika.face.head import Head, MeshObject, Part
+from mimika.face.makehuman import cache
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
 from mimika.face.makehuman.character_file import Character, load_character_spec
 from mimika.face.makehuman.paint import parts_of
@@ -96,7 +97,7 @@ def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, S
         pivot = None if p.pivot is None else p.pivot * scale + offset
         for dst, v in ((bind_objs, bind_v), (posed_objs, posed_v)):
             dst.append(MeshObject(p.name, p.category, v, parts, pivot=pivot, uvs=p.uvs,
-                                  weld=p.weld if p.name == "skin" else None))
+                                  weld=p.weld if p.name == "skin" else None, oriented=True))
     skin_piece = built.pieces[0]
     lm = _landmark_ids(skin_piece.weld)
     lmp = posed_objs[0].vertices[lm]
@@ -117,7 +118,8 @@ def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, S
     shapes = ShapeSet(names, {k: v * scale for k, v in built.deltas.items()})
     table = load_table("makehuman_aus.json")
     skinning = Skinning(sk.names, heads_cm, sk.parents, built.weights,
-                        {k: np.asarray(v) for k, v in pose.items()}, table["head_share"])
+                        {k: np.asarray(v) for k, v in pose.items()}, table["head_share"],
+                        table.get("body", {}))
     return head, SkinnedRig(head, bind_head, shapes, table, skinning)
 
 
@@ -130,9 +132,16 @@ def load_character(spec: str) -> tuple[Head, SkinnedRig]:
     character = load_character_spec(spec)
     key = character.key()
     if key not in _LOADED:
-        built = build(character.phenotype_values(),
-                      Outfit(character.hair, character.eyebrows, character.eyelashes,
-                             character.clothes))
+        path = cache.cache_path(character.geometry_key())
+        built = cache.load(path)
+        if built is None:
+            built = build(character.phenotype_values(),
+                          Outfit(character.hair, character.eyebrows, character.eyelashes,
+                                 character.clothes))
+            try:
+                cache.save(path, built)
+            except OSError as e:
+                log.warning("cannot cache character %r in %s: %s", character.name, path, e)
         if len(_LOADED) >= 4:
             _LOADED.pop(next(iter(_LOADED)))
         _LOADED[key] = assemble(built, character,

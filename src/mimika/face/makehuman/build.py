@@ -114,6 +114,83 @@ def _eye_piece(base: BaseMesh, verts: np.ndarray, side: str) -> Piece:
                  meta={"offsets": o.vertices - c, "rigid": True})
 
 
+def _first_hit(orig: np.ndarray, dirs: np.ndarray, tris: np.ndarray, reach: float
+               ) -> np.ndarray:
+    """Distance along each ray (orig, dirs: (N, 3)) to the nearest of ``tris`` (M, 3, 3)
+    within ``reach``, or inf (Möller–Trumbore over all candidate triangles)."""
+    a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+    e1, e2 = b - a, c - a
+    out = np.full(len(orig), np.inf)
+    for k in range(len(orig)):
+        d = dirs[k]
+        p = np.cross(d, e2)
+        det = (e1 * p).sum(1)
+        ok = np.abs(det) > 1e-12
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        s = orig[k] - a
+        u = (s * p).sum(1) * inv
+        q = np.cross(s, e1)
+        v = (q @ d) * inv
+        t = (e2 * q).sum(1) * inv
+        hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0) & (t < reach)
+        if hit.any():
+            out[k] = t[hit].min()
+    return out
+
+
+def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
+               margin: float = 0.03) -> int:
+    """Push skin vertices that poke through ``cloth`` back under it, in place: a vertex whose
+    inward ray meets the cloth within ``reach`` (base units) moves inward past it by
+    ``margin``, under every layer. Returns how many moves it made. (``delete_verts`` hides
+    most of the covered body; this fixes the edges: collars, cuffs.)"""
+    from scipy.spatial import cKDTree
+
+    from mimika.face.meshgen import vertex_normals
+
+    # one normal and one move per position: the skin is split at UV seams (weld)
+    ids, inv = np.unique(skin_piece.weld, return_inverse=True)
+    first = np.zeros(len(ids), np.int64)
+    first[inv[::-1]] = np.arange(len(inv))[::-1]
+    v = skin_piece.vertices.astype(np.float64)[first]
+    tris_all = inv[np.concatenate(list(skin_piece.parts.values()))]
+    n = vertex_normals(v, tris_all)
+    cf = np.concatenate(list(cloth.parts.values()))
+    tri = cloth.vertices.astype(np.float64)[cf]
+    kd = cKDTree(tri.mean(1))
+    near = np.flatnonzero(kd.query(v, distance_upper_bound=reach * 2)[0] < np.inf)
+    moved = 0
+    for i in near:
+        for _ in range(4):  # layered clothes (collar over shirt): tuck under each layer
+            cand = kd.query_ball_point(v[i], reach * 3)
+            t = _first_hit(v[i:i + 1], -n[i:i + 1], tri[cand], reach)[0]
+            if not np.isfinite(t):
+                break
+            v[i] -= n[i] * (t + margin)
+            moved += 1
+    skin_piece.vertices = v[inv].astype(np.float32)
+    return moved
+
+
+#: skin influences per vertex (what glTF players and game engines take)
+MAX_INFLUENCES = 4
+
+
+def top_influences(w: sp.csr_matrix, k: int = MAX_INFLUENCES) -> sp.csr_matrix:
+    """Keep each row's ``k`` largest weights, renormalised to sum to 1."""
+    dense = np.asarray(w.todense(), np.float64)
+    if dense.shape[1] > k:
+        cut = -np.sort(-dense, axis=1)[:, k - 1:k]
+        dense = np.where(dense >= cut, dense, 0.0)
+        # ties at the cut could leave more than k: keep the first k in bone order
+        over = np.cumsum(dense > 0, axis=1) > k
+        dense[over] = 0.0
+    s = dense.sum(1, keepdims=True)
+    out = sp.csr_matrix(dense / np.where(s > 0, s, 1.0))
+    out.eliminate_zeros()
+    return out
+
+
 @dataclass(frozen=True)
 class Outfit:
     """What the character wears: asset names (``None`` for none)."""
@@ -187,6 +264,9 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
     for obj, cat, mat, proxy in proxies:
         pieces.append(proxy_piece(proxy, obj, cat, mat, n, verts))
 
+    for p in pieces:
+        if p.category == "body":
+            tuck_under(pieces[0], p)
     names = faceunit_names()
     dense = np.stack([read_faceunit(s).dense(n) for s in names])  # (S, N, 3)
     deltas, weights = {}, {}
@@ -195,9 +275,7 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
             deltas[p.name] = np.zeros((len(names), len(p.vertices), 3), np.float32)
         else:
             deltas[p.name] = np.stack([p.binding @ d for d in dense]).astype(np.float32)
-        w = sp.csr_matrix(p.binding @ skel.weights)
-        w.eliminate_zeros()
-        weights[p.name] = w
+        weights[p.name] = top_influences(sp.csr_matrix(p.binding @ skel.weights))
     log.debug("character: %d pieces, %d vertices", len(pieces),
               sum(len(p.vertices) for p in pieces))
     return Built(pieces, skel, names, deltas, weights, verts)

@@ -103,11 +103,15 @@ class Character:
         return {"hair": self.hair, "eyebrows": self.eyebrows, "eyelashes": self.eyelashes,
                 "clothes": list(self.clothes)}
 
-    def key(self) -> str:
-        """A hash of everything that shapes the geometry and its paint."""
-        d = {"p": sorted(self.phenotype_values().items()), "o": self.outfit_dict(),
-             "c": [self.skin, self.eyes, self.hair_color], "v": 1}
+    def geometry_key(self) -> str:
+        """A hash of everything that shapes the geometry (phenotype and outfit)."""
+        d = {"p": sorted(self.phenotype_values().items()), "o": self.outfit_dict()}
         return hashlib.sha1(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
+
+    def key(self) -> str:
+        """A hash of everything that shapes the character: geometry and paint."""
+        d = [self.geometry_key(), self.skin, self.eyes, self.hair_color]
+        return hashlib.sha1(json.dumps(d).encode()).hexdigest()[:16]
 
 
 def preset_names() -> list[str]:

@@ -58,10 +58,11 @@ def read_target(path: str | Path) -> Target:
         raw = gzip.decompress(p.read_bytes()) if p.suffix == ".gz" else p.read_bytes()
     except (OSError, EOFError, gzip.BadGzipFile) as e:
         raise DataError(f"cannot read target {p}: {e}") from None
-    rows = [ln.split() for ln in raw.decode("utf-8", "replace").splitlines()
-            if ln.strip() and not ln.lstrip().startswith("#")]
+    text = raw.decode("utf-8", "replace")
+    if "#" in text:
+        text = "\n".join(ln for ln in text.splitlines() if not ln.lstrip().startswith("#"))
     try:
-        a = np.array(rows, dtype=np.float64).reshape(-1, 4)
+        a = np.array(text.split(), dtype=np.float64).reshape(-1, 4)
     except ValueError:
         raise DataError(f"{p}: expected lines 'index dx dy dz'") from None
     return Target(a[:, 0].astype(np.int64), a[:, 1:].astype(np.float32))

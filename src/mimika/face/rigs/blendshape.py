@@ -220,6 +220,24 @@ class BlendshapeRig(Rig):
             moved[key] = moved.get(key, 0.0) + v
         return split_sides(moved)
 
+    def shape_deltas(self, code: str) -> dict[str, np.ndarray]:
+        """The shape part of AU ``code`` at intensity 1: offsets (N_obj, 3) per object in the
+        rig's own (rest or bind) space, without eye turns or head motion; {} for AUs with
+        no shapes (morph targets of an export)."""
+        c = parse_au(code)
+        b = base_code(c)
+        row = self._row.get(b)
+        if row is None:
+            return {}
+        side = c[4:] or self._bilateral_side.get(b, "")
+        rows = [r for r, s in ((row, "L"), (row + 1, "R")) if side in ("", s)]
+        d = self.delta_matrix[rows].sum(0)
+        flat = np.zeros(len(self._rest) * 3, np.float32)
+        for a, e, col in self._segments:
+            flat[a:e] = d[col:col + e - a]
+        full = flat.reshape(-1, 3)
+        return {n: full[s] for n, s in self._slices.items()}
+
     def deform(self, aus: Mapping[str, float]) -> Positions:
         """Positions per object name, each (N_obj, 3) float32, for AU intensities in [0, 1]."""
         sides = self._sides(aus)
@@ -255,12 +273,19 @@ class BlendshapeRig(Rig):
                 head_t += v * self._head_tr[code]
         if eye_rv.any():
             self._apply_eyes(out[None], eye_rv[None])
-        self._move(out[None], head_rv[None], head_t[None])
+        chk = self.check(aus) if self.body_channels else {}
+        body = np.array([[chk.get(c, 0.0) for c in self.body_channels]], np.float64)
+        self._move(out[None], head_rv[None], head_t[None], body)
         return {n: out[s] for n, s in self._slices.items()}
 
-    def _move(self, buf: np.ndarray, rv: np.ndarray, tr: np.ndarray) -> None:
+    #: body channels (``body.breath`` …) this rig moves; values reach :meth:`_move`
+    body_channels: tuple[str, ...] = ()
+
+    def _move(self, buf: np.ndarray, rv: np.ndarray, tr: np.ndarray,
+              body: np.ndarray | None = None) -> None:
         """Head motion, applied last to all objects in place: buf (T, N, 3), head rotation
-        vectors rv (T, 3) and translations tr (T, 3). Rigs with a skeleton override this."""
+        vectors rv (T, 3), translations tr (T, 3) and body channel values (T, B) in the
+        order of :attr:`body_channels`. Rigs with a skeleton override this."""
         if np.any(rv) or np.any(tr):
             self._apply_head(buf, rv, tr)
 
@@ -343,6 +368,10 @@ class BlendshapeRig(Rig):
         used = np.flatnonzero(np.any(x > 0, axis=0))
         dm = self.delta_matrix[used]
         eye_rv, head_rv, head_tr = vals @ eye, vals @ head, vals @ trans
+        body = np.zeros((len(vals), len(self.body_channels)))
+        for j, c in enumerate(self.body_channels):
+            if c in chans:
+                body[:, j] = vals[:, chans.index(c)]
         t_all = len(vals)
         out = np.empty((t_all, len(self._rest), 3), np.float32)
         for t0 in range(0, t_all, _CHUNK):
@@ -356,5 +385,5 @@ class BlendshapeRig(Rig):
                     flat[:, a:b] += d[:, c:c + b - a]
             if np.any(eye_rv[t0:t1]):
                 self._apply_eyes(buf, eye_rv[t0:t1])
-            self._move(buf, head_rv[t0:t1], head_tr[t0:t1])
+            self._move(buf, head_rv[t0:t1], head_tr[t0:t1], body[t0:t1])
         return {n: out[:, s] for n, s in self._slices.items()}

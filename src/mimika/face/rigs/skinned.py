@@ -8,8 +8,8 @@ Head AUs (51–58) become rotations of the neck and head bones, shared out by ``
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -30,6 +30,8 @@ class Skinning:
     weights: Mapping[str, sp.csr_matrix]
     rest_pose: Mapping[str, np.ndarray]
     head_share: Mapping[str, float]
+    #: body channel → {bone: rotation vector (rad) at value 1}
+    body: Mapping[str, Mapping[str, Sequence[float]]] = field(default_factory=dict)
     translate_bone: str = "neck03"
 
 
@@ -70,24 +72,38 @@ class SkinnedRig(BlendshapeRig):
                             for k, v in skinning.rest_pose.items()}
         self._share = {skinning.names.index(k): float(v) for k, v in skinning.head_share.items()}
         self._t_bone = skinning.names.index(skinning.translate_bone)
+        self.body_channels = tuple(skinning.body)
+        self._supported = (*self._supported, *self.body_channels)
+        #: (B_channels, bones, 3): rotation vectors per body channel at value 1
+        self._body_rv = np.zeros((len(self.body_channels), b, 3))
+        for j, rot in enumerate(skinning.body.values()):
+            for bone, rv in rot.items():
+                self._body_rv[j, skinning.names.index(bone)] = rv
+
+    def local_rotations(self, head_rv: np.ndarray, body: np.ndarray | None = None
+                        ) -> np.ndarray:
+        """Each bone's rotation vector about its head (T, B, 3): rest pose + its share of the
+        head rotations (T, 3) + body channel values (T, len(body_channels))."""
+        sk = self.skinning
+        out = np.zeros((len(head_rv), len(sk.names), 3))
+        for i, rv in self._rest_local.items():
+            out[:, i] += rv
+        for i, share in self._share.items():
+            out[:, i] += share * np.asarray(head_rv, float)
+        if body is not None and body.size:
+            out += np.einsum("tc,cbk->tbk", body, self._body_rv)
+        return out
 
     def bone_transforms(self, head_rv: np.ndarray, head_tr: np.ndarray,
-                        extra: Mapping[int, np.ndarray] | None = None) -> np.ndarray:
+                        body: np.ndarray | None = None) -> np.ndarray:
         """World transforms (T, B, 3, 4) for head rotations (T, 3), translations (T, 3) and
-        ``extra`` bone rotation vectors (bone index → (T, 3))."""
+        body channel values (T, len(body_channels))."""
         sk = self.skinning
         t_all = len(head_rv)
-        nb = len(sk.names)
-        out = np.zeros((t_all, nb, 3, 4))
-        for i in range(nb):
-            rv = np.zeros((t_all, 3))
-            if i in self._rest_local:
-                rv += self._rest_local[i]
-            if i in self._share:
-                rv += self._share[i] * head_rv
-            if extra and i in extra:
-                rv += extra[i]
-            rot = _rotations(rv)
+        rvs = self.local_rotations(head_rv, body)
+        out = np.zeros((t_all, len(sk.names), 3, 4))
+        for i in range(len(sk.names)):
+            rot = _rotations(rvs[:, i])
             h = sk.heads[i]
             local = np.zeros((t_all, 3, 4))
             local[:, :, :3] = rot
@@ -103,8 +119,9 @@ class SkinnedRig(BlendshapeRig):
                 out[:, i, :, 3] = (pa[:, :, :3] @ local[:, :, 3:4])[..., 0] + pa[:, :, 3]
         return out
 
-    def _move(self, buf: np.ndarray, rv: np.ndarray, tr: np.ndarray) -> None:
-        tf = self.bone_transforms(np.asarray(rv, float), np.asarray(tr, float))
+    def _move(self, buf: np.ndarray, rv: np.ndarray, tr: np.ndarray,
+              body: np.ndarray | None = None) -> None:
+        tf = self.bone_transforms(np.asarray(rv, float), np.asarray(tr, float), body)
         w = self._w
         for t in range(len(buf)):
             m = (w @ tf[t].reshape(len(self.skinning.names), 12)).reshape(-1, 3, 4)
