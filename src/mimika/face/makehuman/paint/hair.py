@@ -59,19 +59,36 @@ class _Table:
         return self.v[i] * (1 - f) + self.v[(i + 1) % self.n] * f
 
 
-def _border_distance(at: Atlas, uv: np.ndarray, tris: np.ndarray, weld) -> np.ndarray:
-    """Per covered texel: distance in texels to the mesh's open border (UV seams excluded)."""
+def _border_distance(at: Atlas, uv: np.ndarray, tris: np.ndarray, weld, island: np.ndarray
+                     ) -> np.ndarray:
+    """Per covered texel: distance in texels to the open border (UV seams excluded) of its
+    own UV island — cards often share texture space, so each island is measured alone."""
     e = boundary_edges(tris, weld)
+    e_isl = island[e[:, 0]]
     px = np.column_stack([uv[:, 0] * at.w, (1 - uv[:, 1]) * at.h])
-    a, b = px[e[:, 0]], px[e[:, 1]]
-    n = np.ceil(np.linalg.norm(b - a, axis=1) * 2).astype(np.int64) + 1
-    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n).clip(1)
-    pts = np.repeat(a, n, 0) + t[:, None] * np.repeat(b - a, n, 0)
-    x = np.clip(pts[:, 0].astype(np.int64), 0, at.w - 1)
-    y = np.clip(pts[:, 1].astype(np.int64), 0, at.h - 1)
-    mask = np.ones((at.h, at.w), bool)
-    mask[y, x] = False
-    return ndimage.distance_transform_edt(mask).ravel()[at.texels].astype(np.float32)
+    tex_isl = island[tris[at.faces_at(), 0]]
+    t = at.texels
+    ty, tx = t // at.w, t % at.w
+    out = np.full(len(t), 0.0, np.float32)
+    for i in np.unique(tex_isl):
+        sel = tex_isl == i
+        ei = e[e_isl == i]
+        if not len(ei):
+            out[sel] = 1e3  # a closed island: no border
+            continue
+        a, b = px[ei[:, 0]], px[ei[:, 1]]
+        n = np.ceil(np.linalg.norm(b - a, axis=1) * 2).astype(np.int64) + 1
+        k = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n - 1, n).clip(1)
+        pts = np.repeat(a, n, 0) + k[:, None] * np.repeat(b - a, n, 0)
+        x0, y0 = int(min(tx[sel].min(), pts[:, 0].min())) - 1, \
+            int(min(ty[sel].min(), pts[:, 1].min())) - 1
+        x1, y1 = int(max(tx[sel].max(), pts[:, 0].max())) + 2, \
+            int(max(ty[sel].max(), pts[:, 1].max())) + 2
+        mask = np.ones((y1 - y0, x1 - x0), bool)
+        mask[(pts[:, 1] - y0).astype(np.int64), (pts[:, 0] - x0).astype(np.int64)] = False
+        d = ndimage.distance_transform_edt(mask)
+        out[sel] = d[ty[sel] - y0, tx[sel] - x0]
+    return out
 
 
 def _frame(axis) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -100,6 +117,45 @@ def _poles(st: dict, pos: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, floa
     return out
 
 
+def _across(at: Atlas, p: np.ndarray, pos, uv, tris, jac, tsz, st: dict, poles
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Per texel: the across-strand coordinate (cm; on shells measured 10 cm from the pole)
+    and the local strand spacing relative to that (strands converge toward the pole)."""
+    fid = at.faces_at()
+    across = np.zeros(len(p), np.float32)
+    n_around = max(int(2 * np.pi * 10.0 / st["strand_cm"]), 64)
+    for pole, axis, below in poles:
+        sel = p[:, 1] < below
+        phi, _ = _pole_coords(p[sel], pole, axis)
+        across[sel] = phi / (2 * np.pi) * n_around * st["strand_cm"]
+    a0, *_ = _frame(poles[0][1])
+    rad = np.linalg.norm(np.cross(p - poles[0][0], a0), axis=1).astype(np.float32)
+    scale = np.clip(rad / 10.0, 0.05, None)
+
+    # cards: straight strands along the island's mean root→tip direction in texture space
+    lab = uv_islands(tris, len(uv))[tris[:, 0]]
+    area3 = np.linalg.norm(np.cross(jac[:, :, 0], jac[:, :, 1]), axis=1)
+    uvarea = np.abs(np.linalg.det(np.stack([uv[tris[:, 1]] - uv[tris[:, 0]],
+                                            uv[tris[:, 2]] - uv[tris[:, 0]]], 1)))
+    w = area3 * uvarea  # twice the triangle's area, cm²
+    card = (np.bincount(lab, 0.5 * w, lab.max() + 1)[lab] < CARD_CM2)[fid]
+    if card.any():
+        cen = pos[tris].mean(1)
+        flow3 = cen - poles[0][0]
+        for *_, below in poles[1:]:
+            flow3[cen[:, 1] < below] = [0.0, -1.0, 0.0]
+        flow_uv = np.einsum("fji,fi->fj", np.linalg.pinv(jac), flow3)  # (F, 2)
+        flow_uv /= np.maximum(np.linalg.norm(flow_uv, axis=1, keepdims=True), 1e-12)
+        mean = np.stack([np.bincount(lab, w * flow_uv[:, k]) for k in (0, 1)], 1)
+        d = (mean / np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-12))[lab[fid]]
+        t = at.texels
+        tx = np.column_stack([t % at.w + 0.5, at.h - (t // at.w + 0.5)])  # texel, v up
+        q = (tx[:, 0] * -d[:, 1] + tx[:, 1] * d[:, 0]) * tsz  # cm across
+        across[card] = q[card]
+        scale[card] = 1.0
+    return across, scale
+
+
 def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     """RGBA (sRGB, straight alpha) strand texture for the hair piece."""
     st = style(character.hair or "")
@@ -108,65 +164,27 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     tris = np.concatenate(list(piece.parts.values()))
     pos = piece.vertices.astype(np.float64) * CM
     at = rasterize(uv, tris, (size, size))
-    fid = at.faces_at()
     p = at.at(pos)
-
-    # texture scale (cm per texel) and flow of every triangle
     jac = face_jacobians(pos, uv, tris)  # (F, 3, 2) cm per UV unit
-    area3 = np.linalg.norm(np.cross(jac[:, :, 0], jac[:, :, 1]), axis=1)
-    cm_tex = (np.sqrt(area3) / size).astype(np.float32)
-    tsz = cm_tex[fid]
-    dist = _border_distance(at, uv, tris, piece.weld) * tsz
-
+    cm_tex = np.sqrt(np.linalg.norm(np.cross(jac[:, :, 0], jac[:, :, 1]), axis=1)) / size
+    tsz = cm_tex.astype(np.float32)[at.faces_at()]  # cm per texel
+    island = uv_islands(tris, len(uv))
+    dist = _border_distance(at, uv, tris, piece.weld, island) * tsz
     seed = seed_of("hair", character.hair, character.hair_color, character.name)
     poles = _poles(st, pos)
-    across = np.zeros(len(p), np.float32)  # cm across strands (at 10 cm from the pole)
+    across, scale = _across(at, p, pos, uv, tris, jac, tsz, st, poles)
     n_around = max(int(2 * np.pi * 10.0 / st["strand_cm"]), 64)
-    for pole, axis, below in poles:
-        sel = p[:, 1] < below
-        phi, _ = _pole_coords(p[sel], pole, axis)
-        across[sel] = phi / (2 * np.pi) * n_around * st["strand_cm"]
-    # the pole's strands converge: spacing scales with the distance from the pole's axis
-    a0, *_ = _frame(poles[0][1])
-    rad = np.linalg.norm(np.cross(p - poles[0][0], a0), axis=1).astype(np.float32)
-    scale = np.clip(rad / 10.0, 0.05, None)
-
-    # cards: straight strands along the island's mean root→tip direction in texture space
-    lab = uv_islands(tris, len(uv))[tris[:, 0]]
-    uvarea = np.abs(np.linalg.det(np.stack([uv[tris[:, 1]] - uv[tris[:, 0]],
-                                            uv[tris[:, 2]] - uv[tris[:, 0]]], 1)))
-    isl_cm2 = np.bincount(lab, area3 * uvarea * 0.5, minlength=lab.max() + 1)
-    card_face = isl_cm2[lab] < CARD_CM2
-    card = card_face[fid]
-    if card.any():
-        cen = pos[tris].mean(1)
-        flow3 = cen - poles[0][0]
-        for *_, below in poles[1:]:
-            s = cen[:, 1] < below
-            flow3[s] = [0.0, -1.0, 0.0]
-        flow_uv = np.einsum("fji,fi->fj", np.linalg.pinv(jac), flow3)  # (F, 2)
-        w = area3 * uvarea
-        mean = np.stack([np.bincount(lab, w * flow_uv[:, k] / np.maximum(
-            np.linalg.norm(flow_uv, axis=1), 1e-12)) for k in (0, 1)], 1)
-        d = mean / np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-12)
-        t = at.texels
-        tx = np.column_stack([t % size + 0.5, size - (t // size + 0.5)])  # texel, v up
-        dl = d[lab[fid]]
-        q = (tx[:, 0] * -dl[:, 1] + tx[:, 1] * dl[:, 0]) * tsz  # cm across
-        across[card] = q[card]
-        scale[card] = 1.0
-
-    wave = st["wave_cm"] * fbm3(p, 3.0, seed + 1, octaves=2) / np.maximum(scale, 0.3)
-    qn = across + wave * 0.5
+    qn = across + 0.5 * st["wave_cm"] * fbm3(p, 3.0, seed + 1, octaves=2) / np.maximum(scale,
+                                                                                       0.3)
 
     def octave(spacing: float, k: int) -> np.ndarray:
-        x = qn / np.float32(spacing)
-        v = _Table(max(round(n_around * st["strand_cm"] / spacing), 16), seed + k)(x)
+        v = _Table(max(round(n_around * st["strand_cm"] / spacing), 16), seed + k)(
+            qn / np.float32(spacing))
         # fade an octave out where its strands get narrower than ~2 texels (aliasing)
         keep = smoothstep(1.0, 2.5, spacing * scale / np.maximum(tsz, 1e-6))
         return 0.5 + (v - 0.5) * keep
 
-    if st.get("curl", 0) > 0:
+    if st.get("curl", 0) > 0:  # curls: contour lines of 3-D noise
         cs = float(st["curl"])
         v1 = fbm3(p, cs, seed + 3, octaves=2)
         v2 = fbm3(p, cs * 0.7, seed + 4, octaves=2)
@@ -184,10 +202,13 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
         raw = 0.85 * octave(fine, 14) + 0.15 * octave(st["clump_cm"], 15)
         length = smoothstep(0.3, 0.7, raw)  # spread the strand ends over the fade
 
-    # alpha: 1 inside; within fade_cm of the border each strand ends at its own length
-    fade = float(st["fade_cm"])
-    lo = length * fade * 1.2 - 0.1 * fade
-    alpha = smoothstep(0.0, 1.0, (dist - lo) / (0.25 * fade))
+    # alpha: 1 inside; within fade_cm of the border each strand ends at its own length (on
+    # narrow cards and tufts the fade shrinks to keep a body of hair)
+    isl = island[tris[at.faces_at(), 0]]
+    deepest = np.zeros(isl.max() + 1, np.float32)
+    np.maximum.at(deepest, isl, dist)
+    fade = np.clip(0.4 * deepest[isl], 0.03, float(st["fade_cm"]))
+    alpha = smoothstep(0.0, 1.0, (dist - (length * 1.2 - 0.1) * fade) / (0.25 * fade))
     edge = smoothstep(0.0, fade, dist)
     alpha = alpha * (1.0 - (1.0 - edge) * (1.0 - fibre) * 0.7)
     # strand ends are wisps: translucent (blended, not cut) until well inside the hair
@@ -199,15 +220,14 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     # at the crown strands converge below the texture's resolution: a whorl of short hairs
     whorl = 1.0 - smoothstep(1.0, 2.5, st["strand_cm"] * 3 * scale / np.maximum(tsz, 1e-6))
     tone = tone + 0.3 * whorl * (value3(p, 0.09, seed + 8, order=1) - 0.5)
-    h = at.at(np.linalg.norm(piece.meta.get("offsets", np.zeros_like(pos)), axis=1) * CM)
-    root = 1.0 - smoothstep(0.15, 1.2, h)
+    lift = at.at(np.linalg.norm(piece.meta.get("offsets", np.zeros_like(pos)), axis=1) * CM)
+    root = 1.0 - smoothstep(0.15, 1.2, lift)
     tone = tone * (1.0 - st["root_dark"] * root) * (1.0 + 0.12 * (1.0 - edge))
-    c = base[None, :] * tone[:, None]
-    c = _grey_strands(c, base, strand, fibre, character.hair_color)
+    c = _grey_strands(base[None, :] * tone[:, None], base, strand, fibre)
     return at.image(color.rgba8(c, alpha))
 
 
-def _grey_strands(c, base, strand, fibre, hex_color: str) -> np.ndarray:
+def _grey_strands(c, base, strand, fibre) -> np.ndarray:
     """Greying hair: a share of white strands among darker ones (mean tone kept)."""
     s = color.to_srgb8(base).astype(np.float32) / 255.0
     sat = (s.max() - s.min()) / max(float(s.max()), 1e-6)
