@@ -80,9 +80,9 @@ def assets_sheet(base: str, size: int) -> np.ndarray:
     for h in assets("hair"):
         shot(replace(ch, hair=h), "three-quarter", 0.7, label=h)
     for b in assets("eyebrows"):
-        shot(replace(ch, eyebrows=b), "front", 1.0, 3.0, 2.2, b)
+        shot(replace(ch, eyebrows=b, hair=None), "front", 1.0, 3.0, 2.2, b)
     for e in assets("eyelashes"):
-        shot(replace(ch, eyelashes=e), "three-quarter", 1.0, 4.0, 1.6, e)
+        shot(replace(ch, eyelashes=e, hair=None), "three-quarter", 1.0, 4.0, 1.6, e)
     for o in assets("clothes"):
         shot(replace(ch, clothes=(o,)), "front", 0.3, label=o)
     cols = 6

@@ -118,9 +118,10 @@ def _poles(st: dict, pos: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, floa
 
 
 def _across(at: Atlas, p: np.ndarray, pos, uv, tris, jac, tsz, st: dict, poles
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """Per texel: the across-strand coordinate (cm; on shells measured 10 cm from the pole)
-    and the local strand spacing relative to that (strands converge toward the pole)."""
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per texel: the across-strand coordinate (cm; on shells measured 10 cm from the pole),
+    the local strand spacing relative to that (strands converge toward the pole), and whether
+    the texel is on a card."""
     fid = at.faces_at()
     across = np.zeros(len(p), np.float32)
     n_around = max(int(2 * np.pi * 10.0 / st["strand_cm"]), 64)
@@ -153,7 +154,7 @@ def _across(at: Atlas, p: np.ndarray, pos, uv, tris, jac, tsz, st: dict, poles
         q = (tx[:, 0] * -d[:, 1] + tx[:, 1] * d[:, 0]) * tsz  # cm across
         across[card] = q[card]
         scale[card] = 1.0
-    return across, scale
+    return across, scale, card
 
 
 def paint_hair(piece: Piece, character: Character) -> np.ndarray:
@@ -172,7 +173,7 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     dist = _border_distance(at, uv, tris, piece.weld, island) * tsz
     seed = seed_of("hair", character.hair, character.hair_color, character.name)
     poles = _poles(st, pos)
-    across, scale = _across(at, p, pos, uv, tris, jac, tsz, st, poles)
+    across, scale, card = _across(at, p, pos, uv, tris, jac, tsz, st, poles)
     n_around = max(int(2 * np.pi * 10.0 / st["strand_cm"]), 64)
     qn = across + 0.5 * st["wave_cm"] * fbm3(p, 3.0, seed + 1, octaves=2) / np.maximum(scale,
                                                                                        0.3)
@@ -213,6 +214,8 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     alpha = alpha * (1.0 - (1.0 - edge) * (1.0 - fibre) * 0.7)
     # strand ends are wisps: translucent (blended, not cut) until well inside the hair
     alpha = np.minimum(alpha, 0.3 + 0.7 * smoothstep(0.2, 0.9, edge))
+    if st.get("curl", 0) > 0:  # curly tufts sticking out: a soft halo, not flakes
+        alpha = np.where(card, np.minimum(alpha, 0.45) * (0.4 + 0.6 * strand), alpha)
 
     # colour: clump, strand and fibre tones; darker roots near the scalp; lighter tips
     base = color.hex_linear(character.hair_color)
@@ -238,7 +241,7 @@ def _grey_strands(c, base, strand, fibre) -> np.ndarray:
     white = smoothstep(0.45, 0.65, 0.3 * strand + 0.7 * fibre)
     lum = float(color.luminance(base))
     share = 0.3  # white strands
-    light = np.full(3, min(1.5 * lum, 0.5), np.float32)
+    light = np.full(3, min(1.25 * lum, 0.5), np.float32)
     dark = np.maximum(base - share * light, 0.2 * base) / (1 - share)
     mixed = dark[None, :] * (1 - white[:, None]) + light[None, :] * white[:, None]
     mixed *= (c / np.maximum(base, 1e-6)).mean(1, keepdims=True)
