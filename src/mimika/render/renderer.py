@@ -233,6 +233,8 @@ def _upload_texture(ctx: Any, image: np.ndarray) -> Any:
     tex = ctx.texture((w, h), 4, np.ascontiguousarray(img[::-1]).tobytes())
     tex.build_mipmaps()
     tex.filter = (ctx.LINEAR_MIPMAP_LINEAR, ctx.LINEAR)
+    # cards seen at a slant (lashes, brows, hair) keep their strands instead of blurring
+    tex.anisotropy = 8.0
     return tex
 
 

@@ -60,9 +60,9 @@ def paint_iris(eye_hex: str, seed: int) -> np.ndarray:
 
 
 def _sclera_rgb(r: np.ndarray, th: np.ndarray, rng) -> np.ndarray:
-    white = color.hex_linear("#e6ddd3")
+    white = color.hex_linear("#ddd3c8")
     edge = smoothstep(IRIS_UV + 0.02, 0.5, r)
-    c = white[None, None, :] * (1 - 0.22 * edge)[..., None]
+    c = white[None, None, :] * (1 - 0.3 * edge)[..., None]
     c = c * (1 + (np.array([1.0, 0.86, 0.82], np.float32) - 1) * edge[..., None] ** 1.5)
     # faint vessels from the corners inward
     vein = _angular(th, r, 90, rng, 0.5)

@@ -246,8 +246,8 @@ def _skin_noise(p: np.ndarray, c: np.ndarray, coarse: np.ndarray, seed: int,
     """Mottling, blotches and pores on colours ``c`` (T, 3) at points ``p`` (cm); ``coarse``
     (T, 2): the per-vertex large-scale mottling and blotch fields. Returns the colours and the
     pore field (for the gloss)."""
-    fine = value3(p, 0.3, seed + 10, order=1) - 0.5
-    c = c * (1.0 + 0.05 * coarse[:, 0] + 0.05 * fine)[:, None]
+    fine = value3(p, 0.3, seed + 10) - 0.5
+    c = c * (1.0 + 0.05 * coarse[:, 0] + 0.04 * fine)[:, None]
     c = color.tint(c, (0.06 + 0.08 * light) * coarse[:, 1], (1.0, 0.84, 0.84))
     pores = smoothstep(0.56, 0.8, value3(p, 0.045, seed + 30, order=1))
     c = c * (1.0 - 0.03 * pores)[:, None]
@@ -327,8 +327,8 @@ def _paint_head(at, pos, uv0, cav, cover, margin, lm, on_lips, base, hair, ph, s
     c = color.mix(c, np.array([0.16, 0.035, 0.03]) * (0.4 + 0.6 * light), mouth)
 
     # the lash line: the lid margins darker (lash roots), a little redder just inside
-    rim = np.exp(-(v["margin"] / 0.12) ** 2)
-    c = color.mix(c, c * 0.35 + 0.25 * hair, 0.75 * rim)
+    rim = np.exp(-(v["margin"] / 0.09) ** 2)
+    c = color.mix(c, c * 0.45 + 0.2 * hair, 0.55 * rim)
 
     # brows: skin under them a little darker (hair roots); scalp tinted by the hair
     c = color.mix(c, c * 0.55 + 0.45 * hair, 0.45 * v["brows"])

@@ -100,7 +100,8 @@ def _cards(pos: np.ndarray, tris: np.ndarray, lab: np.ndarray, kind: str):
 
 
 def _draw(strokes, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Rasterise strokes [(points (k, 2) px, widths (k,) px, tone)] → coverage and tone."""
+    """Rasterise strokes [(points (k, 2) px, widths (k,) px, tone in [0, 2])] → coverage and
+    tone."""
     w, h = size
     cov = Image.new("L", (w * SUPER, h * SUPER), 0)
     ton = Image.new("L", (w * SUPER, h * SUPER), 0)
@@ -111,10 +112,10 @@ def _draw(strokes, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
             wd = max(round(widths[k] * SUPER), 1)
             seg = [tuple(q[k]), tuple(q[k + 1])]
             dc.line(seg, fill=255, width=wd)
-            dt.line(seg, fill=int(np.clip(tone, 0, 1) * 255), width=wd)
+            dt.line(seg, fill=int(np.clip(tone / 2, 0, 1) * 255), width=wd)
     a = np.asarray(cov.reduce(SUPER), np.float32) / 255.0
-    t = np.asarray(ton.reduce(SUPER), np.float32) / 255.0
-    return a, np.where(a > 1e-3, t / np.maximum(a, 1e-3), 0.7)
+    t = np.asarray(ton.reduce(SUPER), np.float32) * (2 / 255.0)
+    return a, np.where(a > 1e-3, t / np.maximum(a, 1e-3), 1.0)
 
 
 def _stroke(root, angle, length, width, bend, n=6):
@@ -160,7 +161,7 @@ def brow_canvas(length_cm: float, height_cm: float, st: dict, seed: int
     ang = base - np.radians(10) * v + np.radians(st["jitter_deg"]) * rng.standard_normal(len(s))
     length = st["length_cm"] * px * (0.6 + 0.4 * rng.random(len(s))) * np.where(s < 0.15, 0.7, 1)
     width = st["width_mm"] * 0.1 * px * (0.8 + 0.4 * rng.random(len(s)))
-    tone = 0.9 + 0.2 * rng.random(len(s))
+    tone = 0.8 + 0.45 * rng.random(len(s))  # some hairs catch the light
     strokes = []
     for i in np.argsort(rng.random(len(s))):
         pts, wd = _stroke(np.array([x[i], y[i]]), ang[i], length[i], width[i],
@@ -202,17 +203,17 @@ def lash_canvas(length_cm: float, height_cm: float, st: dict, lower: bool, seed:
     if not lower and st["clump"] > 1:  # tips gather into clumps
         g = np.arange(len(s)) // int(st["clump"])
         mean = np.stack([np.bincount(g, tips[:, k]) / np.bincount(g) for k in (0, 1)], 1)
-        tips = tips + 0.55 * (mean[g] - tips)
-    width = st["width_mm"] * 0.1 * px * rng.uniform(0.8, 1.2, len(s))
-    tone = rng.uniform(0.85, 1.15, len(s))
+        tips = tips + 0.25 * (mean[g] - tips)
+    width = st["width_mm"] * 0.1 * px * rng.uniform(0.8, 1.2, len(s)) * (0.7 if lower else 1)
+    tone = rng.uniform(0.85, 1.15, len(s)) * (1.6 if lower else 1.0)  # lower: finer, lighter
     strokes = []
-    # the lash line: short dense hairs and roots along the lid margin
-    m = int(len(s) * 1.5)
+    # the lash line (upper lid): short dense hairs and roots along the lid margin
+    m = 0 if lower else len(s)
     ls = np.sort(rng.uniform(0.02, 0.98, m))
     for i in range(m):
         r0 = np.array([ls[i] * w, h * rng.uniform(0.0, 0.03)])
         pts, wd = _stroke(r0, np.radians(90 + rng.normal(0, 12)),
-                          h * rng.uniform(0.06, 0.16), width.mean() * 1.2, 0.0, n=3)
+                          h * rng.uniform(0.05, 0.12), width.mean() * 0.7, 0.0, n=3)
         pts[:, 1] = h - pts[:, 1]
         strokes.append((pts, wd, 0.8))
     curl = st["curl"] * (0.5 if lower else 1.0)
@@ -267,4 +268,6 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
     else:
         base = hair * st["tone"]
     c = base[None, :] * tone[:, None]
+    # hairs that catch the light show even in black brows
+    c = c + np.float32(0.03) * np.clip(tone - 1.0, 0, None)[:, None]
     return at.image(color.rgba8(c, np.clip(alpha * 1.15, 0, 1)))
