@@ -86,8 +86,7 @@ def _border_distance(at: Atlas, uv: np.ndarray, tris: np.ndarray, weld, island: 
             int(max(ty[sel].max(), pts[:, 1].max())) + 2
         mask = np.ones((y1 - y0, x1 - x0), bool)
         mask[(pts[:, 1] - y0).astype(np.int64), (pts[:, 0] - x0).astype(np.int64)] = False
-        d = ndimage.distance_transform_edt(mask)
-        out[sel] = d[ty[sel] - y0, tx[sel] - x0]
+        out[sel] = ndimage.distance_transform_edt(mask)[ty[sel] - y0, tx[sel] - x0]
     return out
 
 

@@ -74,6 +74,10 @@ def rasterize(uv: np.ndarray, tris: np.ndarray, size: tuple[int, int]) -> Atlas:
     face = np.full((h, w), -1, np.int32)
     bary = np.zeros((h, w, 3), np.float32)
     p = px[tris]  # (F, 3, 2)
+    # triangles laid over exactly the same texels (stacked hair cards) would only overwrite
+    # each other: draw the last of each such stack
+    _, first_rev = np.unique(np.round(p[::-1].reshape(len(p), 6), 4), axis=0, return_index=True)
+    order = np.sort(len(p) - 1 - first_rev)
     lo = np.clip(np.floor(p.min(1) - 0.5), 0, [w - 1, h - 1]).astype(np.int64)
     hi = np.clip(np.ceil(p.max(1) - 0.5), 0, [w - 1, h - 1]).astype(np.int64)
     bw = hi[:, 0] - lo[:, 0] + 1
@@ -82,13 +86,13 @@ def rasterize(uv: np.ndarray, tris: np.ndarray, size: tuple[int, int]) -> Atlas:
     det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
     ok = np.abs(det) > 1e-12
     inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    cum = np.cumsum(counts)
+    cum = np.cumsum(counts[order])
     start = 0
-    while start < len(tris):
+    while start < len(order):
         base = cum[start - 1] if start else 0
         stop = int(np.searchsorted(cum, base + _CHUNK, side="right"))
         stop = max(stop, start + 1)
-        sel = np.arange(start, stop)
+        sel = order[start:stop]
         sel = sel[ok[sel]]
         if len(sel):
             n = counts[sel]
