@@ -45,7 +45,7 @@ from mimika.io.gltf import (
 from mimika.tracks import AUTrack
 
 _SKIN_MATERIALS = ("skin", "lips", "skin_body")
-_TWO_SIDED = ("hair", "brow", "lash", "eyebrow", "eyelash", "cloth", "cornea")
+_TWO_SIDED = ("hair", "hair_coily", "brow", "lash", "eyebrow", "eyelash", "cloth", "cornea")
 
 
 def _png(image: np.ndarray, drop_alpha: bool) -> bytes:

@@ -86,5 +86,10 @@ def parts_of(piece: Piece, character: Character) -> tuple[Part, ...]:
     for mat, faces in piece.parts.items():
         tex, mode = _part_texture(mat, piece, character) if piece.uvs is not None else \
             (None, "opaque")
-        out.append(Part(MATERIALS.get(mat, mat) if tex is not None else mat, faces, tex, mode))
+        name = MATERIALS.get(mat, mat) if tex is not None else mat
+        if mat == "hair" and tex is not None:
+            from mimika.face.makehuman.paint.hair import style
+
+            name = "hair_coily" if style(character.hair or "").get("curl", 0) > 0 else "hair"
+        out.append(Part(name, faces, tex, mode))
     return tuple(out)

@@ -211,10 +211,10 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     alpha = smoothstep(0.0, 1.0, (dist - (length * 1.2 - 0.1) * fade) / (0.25 * fade))
     edge = smoothstep(0.0, fade, dist)
     alpha = alpha * (1.0 - (1.0 - edge) * (1.0 - fibre) * 0.7)
-    # strand ends are wisps: translucent (blended, not cut) until well inside the hair
-    alpha = np.minimum(alpha, 0.3 + 0.7 * smoothstep(0.2, 0.9, edge))
     if st.get("curl", 0) > 0:  # curly tufts sticking out: a soft halo, not flakes
         alpha = np.where(card, np.minimum(alpha, 0.45) * (0.4 + 0.6 * strand), alpha)
+    else:  # straight strand ends are wisps: translucent until well inside the hair
+        alpha = np.minimum(alpha, 0.3 + 0.7 * smoothstep(0.2, 0.9, edge))
 
     # colour: clump, strand and fibre tones; darker roots near the scalp; lighter tips
     base = color.hex_linear(character.hair_color)
