@@ -8,14 +8,11 @@ Patterns run in each island's own frame: *along* is the island's mean texture di
 
 from __future__ import annotations
 
-import functools
-import json
-from importlib import resources
-
 import numpy as np
 from scipy import ndimage
 
 from mimika.errors import DataError
+from mimika.face.makehuman.build import SCALE as CM
 from mimika.face.makehuman.build import Piece
 from mimika.face.makehuman.paint import color
 from mimika.face.makehuman.paint.noise import fbm3, seed_of, smoothstep, value3
@@ -29,15 +26,14 @@ from mimika.face.makehuman.paint.surface import (
     smooth_normals,
     welded,
 )
+from mimika.face.makehuman.paint.tables import table
 
-CM = 10.0
 SIZE = 2048
 
 
-@functools.cache
 def garments() -> dict:
-    text = resources.files("mimika.face.makehuman.paint").joinpath("data", "garments.json")
-    return json.loads(text.read_text("utf-8"))
+    """Settings per asset (``data/garments.json``)."""
+    return table("garments")
 
 
 def garment_map(asset: str, tris: np.ndarray, uv: np.ndarray) -> tuple[list[str], np.ndarray]:

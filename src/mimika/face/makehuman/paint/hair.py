@@ -13,13 +13,10 @@ Curly styles (``curl`` > 0) use contour lines of 3-D noise instead.
 
 from __future__ import annotations
 
-import functools
-import json
-from importlib import resources
-
 import numpy as np
 from scipy import ndimage
 
+from mimika.face.makehuman.build import SCALE as CM
 from mimika.face.makehuman.build import Piece
 from mimika.face.makehuman.character_file import Character
 from mimika.face.makehuman.paint import color
@@ -27,17 +24,15 @@ from mimika.face.makehuman.paint.noise import fbm3, seed_of, smoothstep, value3
 from mimika.face.makehuman.paint.raster import Atlas, rasterize
 from mimika.face.makehuman.paint.regions import uv_islands
 from mimika.face.makehuman.paint.surface import boundary_edges, face_jacobians
+from mimika.face.makehuman.paint.tables import table
 
-CM = 10.0
 #: islands smaller than this (cm²) are cards: strands straight in texture space
 CARD_CM2 = 250.0
 
 
-@functools.cache
-def styles() -> dict[str, dict]:
-    text = resources.files("mimika.face.makehuman.paint").joinpath("data", "hair.json")
-    return {k: v for k, v in json.loads(text.read_text("utf-8")).items()
-            if not k.startswith("_")}
+def styles() -> dict:
+    """Settings per asset (``data/hair.json``)."""
+    return table("hair")
 
 
 def style(name: str) -> dict:

@@ -17,6 +17,7 @@ from importlib import resources
 import numpy as np
 import scipy.sparse as sp
 
+from mimika.face.makehuman.build import SCALE as CM
 from mimika.face.makehuman.build import Piece, asset_path
 from mimika.face.makehuman.character_file import Character
 from mimika.face.makehuman.paint import color
@@ -37,8 +38,6 @@ HEAD_SIZE = (1024, 2048)
 BODY_SIZE = (1024, 1024)
 #: texels left around the head island in its atlas
 PAD = 6
-#: base units (dm) → cm
-CM = 10.0
 
 
 def landmarks(piece: Piece) -> np.ndarray:

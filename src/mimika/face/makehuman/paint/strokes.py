@@ -9,16 +9,13 @@ its interpolated (s, t). Settings per asset: ``data/strokes.json``.
 
 from __future__ import annotations
 
-import functools
-import json
-from importlib import resources
-
 import numpy as np
 import scipy.sparse as sp
 from PIL import Image, ImageDraw
 from scipy import ndimage
 from scipy.sparse.csgraph import dijkstra
 
+from mimika.face.makehuman.build import SCALE as CM
 from mimika.face.makehuman.build import Piece
 from mimika.face.makehuman.character_file import Character
 from mimika.face.makehuman.paint import color
@@ -26,19 +23,17 @@ from mimika.face.makehuman.paint.noise import seed_of
 from mimika.face.makehuman.paint.raster import rasterize
 from mimika.face.makehuman.paint.regions import uv_islands
 from mimika.face.makehuman.paint.surface import boundary_edges
+from mimika.face.makehuman.paint.tables import table
 
-CM = 10.0
 SIZE = 1024
 #: canvas resolution (cm per pixel) and supersampling of the drawing
 CANVAS_CM = 0.004
 SUPER = 3
 
 
-@functools.cache
-def settings() -> dict[str, dict]:
-    text = resources.files("mimika.face.makehuman.paint").joinpath("data", "strokes.json")
-    return {k: v for k, v in json.loads(text.read_text("utf-8")).items()
-            if not k.startswith("_")}
+def settings() -> dict:
+    """Settings per asset (``data/strokes.json``)."""
+    return table("strokes")
 
 
 def _across(pos: np.ndarray, tris: np.ndarray, s: np.ndarray, up: np.ndarray
