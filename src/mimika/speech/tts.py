@@ -128,8 +128,8 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
     ----------
     text : str
         Plain text (split into sentences, each synthesised on its own) or, with ``ssml=True``,
-        an SSML document (``<speak>``, ``<prosody rate= pitch=>``, ``<break time=>`` … as
-        espeak-ng's SSML mode supports them), synthesised in one piece.
+        an SSML document (see :mod:`mimika.speech.ssml`: break, prosody, emphasis, sub,
+        phoneme, say-as, lang, voice, audio). Words carry the text as written.
     lang : str
         espeak-ng language code: ``en``, ``en-us``, ``de``, ``pl`` … (``mimika voices``).
     voice : str, optional
@@ -145,11 +145,17 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
         ``audio`` shape (n_samples,), ``sr`` 22 050; phones tile the whole audio.
     """
     from mimika.speech import espeak
+    from mimika.speech.words import tokens, word_times
 
     if not isinstance(text, str) or not text.strip():
         raise ParameterError("text is empty; give at least one word to speak")
     code = espeak.check_lang(lang)
-    pieces = [(text, 0)] if ssml else split_sentences(text)
+    if ssml:
+        from mimika.speech.ssml import parse, speak
+
+        return speak(parse(text), lang=code, voice=voice, rate=rate, pitch=pitch,
+                     volume=volume)[0]
+    pieces = split_sentences(text)
     if not pieces:
         raise ParameterError("text is empty; give at least one word to speak")
     chunks: list[np.ndarray] = []
@@ -159,12 +165,12 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
     n_total = 0
     sr = espeak.sample_rate()
     for sent, char0 in pieces:
-        raw = espeak.synth(sent, lang=code, voice=voice, rate=rate, pitch=pitch, volume=volume,
-                           ssml=ssml)
+        raw = espeak.synth(sent, lang=code, voice=voice, rate=rate, pitch=pitch, volume=volume)
         sr = raw.sr
         t0 = n_total / sr
-        ph, ws = events_to_timing(raw.events, n_samples=len(raw.audio), sr=sr, text=sent,
-                                  t0=t0, char0=char0)
+        ph, _ = events_to_timing(raw.events, n_samples=len(raw.audio), sr=sr, text=sent, t0=t0,
+                                 char0=char0)
+        ws = word_times(ph, tokens(sent, offset=char0), lang=code)
         if phones and ph and phones[-1].is_pause and ph[0].is_pause:
             phones[-1] = Phone("_", phones[-1].start, ph[0].end)
             ph = ph[1:]
@@ -172,7 +178,7 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
         words += ws
         chunks.append(raw.audio)
         n_total += len(raw.audio)
-        sents.append(Sentence(_plain(sent) if ssml else sent, t0, n_total / sr))
+        sents.append(Sentence(sent, t0, n_total / sr))
     audio = (np.concatenate(chunks).astype(np.float32) / 32768.0) if chunks else np.zeros(0)
     log.debug("synthesised %d sentences, %.2f s, %d phones", len(sents), n_total / sr,
               len(phones))
@@ -181,7 +187,3 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
     return Utterance(audio.astype(np.float32), sr, phones, words, sents, lang=code, text=text,
                      meta={"source": "espeak-ng", "voice": voice or code, "rate": rate,
                            "pitch": pitch})
-
-
-def _plain(ssml: str) -> str:
-    return re.sub(r"\s+", " ", re.sub(r"<[^>]*>", " ", ssml)).strip()
