@@ -118,6 +118,44 @@ def run_engine(engine: str, a, sr, truth):
     return spans, apex
 
 
+def audio_only(data, fps: float = 25.0) -> None:
+    """Lip-sync without a transcript against the transcript-aligned result: viseme agreement
+    per frame (Oculus-15) and the share of aligned /p b m/ whose lips also close (within one
+    frame) in the recognised track."""
+    from mimika.speech.alignment import recognise
+    from mimika.speech.coarticulation import closure_ok, mouth_track
+    from mimika.speech.export import viseme_cues
+
+    def frames(u, n):
+        out = np.empty(n, object)
+        for c in viseme_cues(u, format="oculus"):
+            out[int(np.ceil(c["start"] * fps - 1e-9)):int(np.ceil(c["end"] * fps - 1e-9))] = \
+                c["value"]
+        return out
+
+    agree = total = hit = n_b = 0
+    secs = audio_s = 0.0
+    for _i, a, truth, sr in data:
+        ref = align(a, sr=sr, transcript=" ".join(w for w, _, _ in truth), lang="en")
+        t0 = time.perf_counter()
+        rec = recognise(a, sr=sr)
+        tr = mouth_track(rec, fps=fps)
+        secs += time.perf_counter() - t0
+        audio_s += len(a) / sr
+        n = tr.n_frames
+        fa, fb = frames(ref, n), frames(rec, n)
+        agree += int(np.sum(fa == fb))
+        total += n
+        for t in bilabial_apex_times(ref):
+            n_b += 1
+            k = round(t * fps)
+            hit += any(closure_ok(dict(zip(tr.channels, tr.values[j], strict=True)))
+                       for j in range(max(0, k - 1), min(n, k + 2)))
+    print(f"audio-only (no transcript) vs aligned transcript: viseme agreement per frame "
+          f"{100 * agree / total:.1f}%, /p b m/ closed within one frame {100 * hit / n_b:.1f}% "
+          f"({n_b} closures), {secs / audio_s:.4f} s per s")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--dir", default=os.environ.get("MIMIKA_SPEECH_DIR", str(DEFAULT_DIR)))
@@ -125,6 +163,8 @@ def main() -> None:
     ap.add_argument("--conditions", default="clean,edge,noise20,noise10,quiet,loud,slow,fast,"
                                             "pause")
     ap.add_argument("--engines", default="pocketsphinx,sphinx,dtw")
+    ap.add_argument("--audio-only", action="store_true",
+                    help="also measure lip-sync without a transcript (clean audio)")
     args = ap.parse_args()
     d = Path(args.dir)
     if not (d / "wav").is_dir():
@@ -162,6 +202,8 @@ def main() -> None:
             print(f"{cond:<9} {eng:<13} {np.median(e):5.1f}ms {np.percentile(e, 90):4.0f}ms "
                   f"{100 * np.mean(e <= 50):5.1f}% {clos} {secs / audio_s:8.4f}"
                   + (f"  ({fails} failed)" if fails else ""), flush=True)
+        if args.audio_only and cond == "clean":
+            audio_only(data)
 
 
 if __name__ == "__main__":

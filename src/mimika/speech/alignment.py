@@ -315,3 +315,24 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     meta["engine"] = use
     log.debug("aligned %.2f s of audio to %d phones with %s", len(a) / sr, len(phones), use)
     return Utterance(a, int(sr), phones, words, sents, lang=code, text=transcript, meta=meta)
+
+
+def recognise(audio: np.ndarray, *, sr: int, lang: str = "en") -> Utterance:
+    """Lip-sync input from audio alone: the phones pocketsphinx's en-us phone model hears.
+
+    No transcript, so no words. Every language goes through the English phone model (its 39
+    phones cover the mouth shapes — viseme classes — of most languages; vowels of other
+    languages land on the nearest English one); ``lang`` only selects the viseme overrides.
+    """
+    from mimika.speech import espeak, sphinx
+
+    a = valid_audio(audio, sr=sr)
+    if len(a) < sr * 0.1:
+        raise ParameterError(f"audio is {len(a) / sr:.3f} s long; need at least 0.1 s of speech")
+    code = espeak.check_lang(lang)
+    if not sphinx.available():
+        raise ParameterError("lip-sync without a transcript needs pocketsphinx "
+                             "(pip install 'pocketsphinx==5.1.1'); or give --transcript")
+    phones = sphinx.recognise_phones(a, sr=int(sr))
+    return Utterance(a, int(sr), phones, [], [], lang="en" if code.startswith("en") else code,
+                     text="", meta={"source": "recognition", "engine": "sphinx-phones"})
