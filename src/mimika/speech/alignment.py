@@ -242,6 +242,40 @@ def _dtw_phones(a: np.ndarray, sr: int, transcript: str, lang: str, voice: str |
     return phones, cost
 
 
+#: recording kept around the detected speech for pocketsphinx (s)
+SPHINX_MARGIN = 0.5
+
+
+def _sphinx_phones(a: np.ndarray, sr: int, toks, lang: str, act: np.ndarray
+                   ) -> tuple[list[Phone], list[int]]:
+    """pocketsphinx on the speech part (± 0.5 s): what lies further out is a pause."""
+    from mimika.speech import sphinx
+    from mimika.speech.vad import speech_span
+
+    dur = len(a) / sr
+    span = speech_span(act) or (0.0, dur)
+    c0 = max(0.0, span[0] - SPHINX_MARGIN)
+    c1 = min(dur, span[1] + SPHINX_MARGIN)
+    k0, k1 = round(c0 * sr), round(c1 * sr)
+    c0 = k0 / sr
+    phones, owner = sphinx.force_align(a[k0:k1], sr=sr, toks=toks, lang=lang)
+    out = [Phone(p.symbol, p.start + c0, p.end + c0, p.stress) for p in phones]
+    own = list(owner)
+    if c0 > 0:
+        if out[0].is_pause:
+            out[0] = Phone("_", 0.0, out[0].end)
+        else:
+            out.insert(0, Phone("_", 0.0, c0))
+            own.insert(0, -1)
+    if out[-1].end < dur:
+        if out[-1].is_pause:
+            out[-1] = Phone("_", out[-1].start, dur)
+        else:
+            out.append(Phone("_", out[-1].end, dur))
+            own.append(-1)
+    return out, own
+
+
 def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
           voice: str | None = None, engine: str = "auto") -> Utterance:
     """Phoneme/word/sentence timing of a recording of ``transcript``.
@@ -289,7 +323,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     meta: dict = {"source": "alignment"}
     if use == "sphinx":
         try:
-            phones, owner = sphinx.force_align(a, sr=sr, toks=toks, lang=code)
+            phones, owner = _sphinx_phones(a, int(sr), toks, code, act)
         except ParameterError as e:
             if engine == "sphinx":
                 raise

@@ -9,8 +9,9 @@ Part of that state survives ``espeak_Terminate``/``espeak_Initialize`` (static v
 wave generator), so the same text could sound a few samples different depending on what was
 spoken before. Every :func:`synth` therefore starts from a freshly loaded library: mimika
 loads a private copy of ``libespeak-ng.so`` and unloads (``dlclose``) and reloads it before a
-synthesis when anything was synthesised since the last load (≈ 6 ms). The same input gives
-the same audio whatever ran before in the process, and the same as in a fresh process.
+synthesis when anything was synthesised since the last load (≈ 6 ms), and seeds espeak-ng's
+random numbers (voice variants draw from them). The same input gives the same audio whatever
+ran before in the process, and the same as in a fresh process.
 
 Nothing here is imported by ``import mimika``; ctypes and the library load on first use.
 """
@@ -44,6 +45,7 @@ _SSML = 0x10
 _PHONEMES = 0x100  # [[mnemonics]] in the text are phonemes
 _RATE, _VOLUME, _PITCH, _RANGE = 1, 2, 3, 4
 
+RAND_SEED = 1  #: seed of espeak-ng's random numbers, set before every synthesis
 RATE_RANGE = (80, 450)  #: words per minute espeak accepts
 PITCH_RANGE = (0, 100)
 
@@ -104,11 +106,12 @@ def _unload() -> None:
     _ctypes.dlclose(handle)
 
 
-def _fresh() -> None:
-    """Reload the library if anything was synthesised since it was loaded."""
-    if _STATE.get("dirty"):
+def _fresh(*, after_phonemes: bool = True) -> None:
+    """Reload the library if anything was synthesised since it was loaded (or, with
+    ``after_phonemes``, anything phonemised: that may leave state a synthesis would hear)."""
+    if _STATE.get("dirty") or (after_phonemes and _STATE.get("phonemised")):
         _unload()
-        _STATE["dirty"] = False
+        _STATE["dirty"] = _STATE["phonemised"] = False
 
 
 def _lib():
@@ -153,6 +156,7 @@ def _lib():
     lib.espeak_SetParameter.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int]
     lib.espeak_Synth.argtypes = [ctypes.c_char_p, ctypes.c_size_t, ctypes.c_uint, ctypes.c_int,
                                  ctypes.c_uint, ctypes.c_uint, ctypes.c_void_p, ctypes.c_void_p]
+    lib.espeak_ng_SetRandSeed.argtypes = [ctypes.c_long]
     lib.espeak_TextToPhonemes.argtypes = [ctypes.POINTER(ctypes.c_char_p), ctypes.c_int,
                                           ctypes.c_int]
     lib.espeak_TextToPhonemes.restype = ctypes.c_char_p
@@ -330,6 +334,7 @@ def synth(text: str, *, lang: str = "en", voice: str | None = None, rate: int = 
         name = _voice_name(lang, voice)
         _fresh()
         lib, _ = _lib()
+        lib.espeak_ng_SetRandSeed(RAND_SEED)  # variants (f3, klatt …) draw from rand()
         _STATE["dirty"] = True
         if _STATE["voice"] != name:
             if lib.espeak_SetVoiceByName(name.encode()) != 0:
@@ -356,8 +361,9 @@ def text_to_phonemes(text: str, *, lang: str = "en") -> list[str]:
     phonemes by ``|``, stress marks in front (``"h|@|l|'oU w|'3:|l|d"``)."""
     with _LOCK:
         name = _voice_name(lang, None)
+        _fresh(after_phonemes=False)
         lib, (ctypes, _) = _lib()
-        _STATE["dirty"] = True
+        _STATE["phonemised"] = True
         if _STATE["voice"] != name:
             if lib.espeak_SetVoiceByName(name.encode()) != 0:
                 raise ParameterError(f"espeak-ng cannot load voice {name!r}")

@@ -3,8 +3,9 @@
 Frame energy is the mean of the log mel band powers (every band weighs the same, so /s/ and
 /f/ count as much as vowels), in dB, every 10 ms. A frame is active when it is more than
 ``threshold`` of the way from the noise floor (10th percentile) to the speech level (95th
-percentile); only runs of at least ``min_run`` seconds count, so clicks, lip smacks and
-short breaths in the silence around an utterance do not start it.
+percentile, of frames within 45 dB of it, so padding with digital silence does not lower
+it); only runs of at least ``min_run`` seconds count, so clicks, lip smacks and short breaths
+in the silence around an utterance do not start it.
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ from mimika.speech.utterance import Phone
 HOP = 0.01  #: activity frame step (s)
 THRESHOLD = 0.3
 MIN_RUN = 0.06
+#: frames more than this far below the speech level do not count for the noise floor (dB)
+RANGE_DB = 45.0
 #: how far a word edge next to a pause may move to meet the energy (s)
 EDGE_WINDOW = 0.15
 #: silent closure allowed before the first sound of a word after a pause (a stop's closure)
@@ -35,7 +38,10 @@ def activity(audio: np.ndarray, *, sr: int, hop: float = HOP, threshold: float =
              min_run: float = MIN_RUN) -> np.ndarray:
     """Boolean speech activity per frame (runs shorter than ``min_run`` s removed)."""
     e = frame_energy(audio, sr=sr, hop=hop)
-    lo, hi = np.percentile(e, 10), np.percentile(e, 95)
+    hi = np.percentile(e, 95)
+    # the floor of the recording's own background: digital silence (padding, a muted
+    # stretch) far below it must not make that background look like speech
+    lo = np.percentile(e[e > hi - RANGE_DB], 10)
     act = e > lo + threshold * (hi - lo)
     n = max(1, round(min_run / hop))
     out = np.zeros_like(act)
