@@ -124,8 +124,20 @@ def ipa_to_espeak(ph: str) -> str:
     return "".join(out)
 
 
+def _ms(time: str) -> str:
+    """``"1.5s"`` → ``"1500ms"``: espeak-ng reads only whole numbers of its unit."""
+    m = re.fullmatch(r"\s*(\d+(?:\.\d*)?|\.\d+)\s*(ms|s)?\s*", time)
+    if not m:
+        raise ParameterError(f"break time={time!r} is not a time; write it like \"1.5s\" or "
+                             "\"300ms\"")
+    v = float(m.group(1)) * (1.0 if m.group(2) == "ms" else 1000.0)
+    return f"{round(v)}ms"
+
+
 def _open_tag(tag: str, attrs: dict[str, str]) -> str:
     keep = {k: v for k, v in attrs.items() if k in _ATTRS.get(tag, ())}
+    if tag == "break" and "time" in keep:
+        keep["time"] = _ms(keep["time"])
     return f"<{tag}" + "".join(f" {k}={quoteattr(v)}" for k, v in keep.items()) + ">"
 
 
