@@ -334,13 +334,14 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
         owner = assign_phones(phones, toks, lang=code)
         meta["alignment_cost"] = round(cost, 4)
     phones, owner = pad(phones, owner)
-    phones, owner = unpad(refine_edges(phones, act), owner)
-    spans: dict[int, list[float]] = {}
+    phones = refine_edges(phones, act)
+    spans: dict[int, list[float]] = {}  # from every phone, even one DTW squeezed to nothing
     for p, o in zip(phones, owner, strict=True):
         if o >= 0:
             spans.setdefault(o, [p.start, p.end])[1] = p.end
     words = [Word(t.text, spans[k][0], spans[k][1], t.offset)
              for k, t in enumerate(toks) if k in spans]
+    phones, owner = unpad(phones, owner)
     sents = []
     for text, c0 in split_sentences(transcript):
         ws = [w for w in words if c0 <= w.offset < c0 + len(text)]
