@@ -263,8 +263,11 @@ def normalize_lang(lang: str) -> str:
 
 
 def languages() -> list[str]:
-    """Every language code some espeak-ng voice speaks, sorted."""
-    return sorted({x for v in list_voices() for x in v.languages if x != "variant"})
+    """Every language code some espeak-ng voice speaks, sorted (read once per process)."""
+    if "languages" not in _STATE:
+        _STATE["languages"] = sorted({x for v in list_voices() for x in v.languages
+                                      if x != "variant"})
+    return list(_STATE["languages"])
 
 
 def check_lang(lang: str) -> str:

@@ -2,9 +2,9 @@
 alignment of a transcript and phone recognition without one.
 
 pocketsphinx 5 ships its en-us acoustic model, the CMU pronouncing dictionary and a phone
-language model. Words the dictionary lacks (names, ``$100``, ``3.14159``) are added with the
-pronunciation espeak-ng gives them, mapped to ARPAbet (``data/arpabet.json``), so each
-written token is one dictionary word and its time is the time of what was said for it.
+language model. Every written token (``bin``, ``$100``, ``3.14159``) becomes one decoder word
+whose pronunciation is espeak-ng's reading in the chosen accent, mapped to ARPAbet
+(``data/arpabet.json``), so its time is the time of what was said for it.
 Recognised ARPAbet phones become espeak mnemonics, so the viseme layer sees the same symbols
 as from synthesis. Decoders are cached per process and used under one lock; the features are
 normalised per utterance (batch CMN), so a result does not depend on what was decoded before.
@@ -85,14 +85,26 @@ def _decode(dec: Any, pcm: bytes) -> None:
     dec.end_utt()
 
 
+def _pronunciation(token: Token, lang: str) -> str:
+    """ARPAbet of how espeak-ng reads ``token`` in ``lang`` (its accent: en is British,
+    non-rhotic; en-us rhotic)."""
+    t = _table()
+    arpa = dict(t["from_espeak"])
+    if lang not in t["rhotic_langs"]:
+        arpa.update(t["non_rhotic"])
+    return " ".join(arpa[s] for s, _ in phonemize(token.say, lang=lang) if s in arpa)
+
+
 def _dict_word(dec: Any, token: Token, lang: str) -> str:
-    """The dictionary word for ``token``: itself (lower case) or an added pseudo-word."""
-    w = re.sub(r"[’`]", "'", token.say.lower())
-    if re.fullmatch(r"[a-z][a-z']*", w) and dec.lookup_word(w) is not None:
-        return w
-    arpa = _table()["from_espeak"]
-    pron = " ".join(arpa[s] for s, _ in phonemize(token.say, lang=lang) if s in arpa)
+    """The decoder's word for ``token``: a pseudo-word with espeak-ng's pronunciation in the
+    chosen accent (on GRID's British speaker this aligns better than the American CMU
+    dictionary: 87.7 % vs 86.7 % of boundaries within 50 ms), the dictionary's entry when
+    espeak gives nothing usable."""
+    pron = _pronunciation(token, lang)
     if not pron:
+        w = re.sub(r"[’`]", "'", token.say.lower())
+        if re.fullmatch(r"[a-z][a-z']*", w) and dec.lookup_word(w) is not None:
+            return w
         pron = "SIL"
     name = "w" + hashlib.sha1(pron.encode()).hexdigest()[:12]
     if dec.lookup_word(name) is None:
