@@ -260,7 +260,7 @@ def speak(items: Sequence[Item], *, lang: str = "en", voice: str | None = None,
     them); ``base`` resolves relative ``audio src``.
     """
     from mimika.speech import espeak
-    from mimika.speech.tts import events_to_timing, split_sentences
+    from mimika.speech.tts import events_to_phones, split_sentences
 
     code = espeak.check_lang(lang)
     sr = espeak.sample_rate()
@@ -279,7 +279,7 @@ def speak(items: Sequence[Item], *, lang: str = "en", voice: str | None = None,
             raw = espeak.synth(doc, lang=code, voice=voice, rate=rate, pitch=pitch,
                                volume=volume, ssml=True, phonemes=piece.phonemes)
             a = raw.audio.astype(np.float32) / 32768.0
-            ph, _ = events_to_timing(raw.events, n_samples=len(raw.audio), sr=raw.sr, text=doc)
+            ph = events_to_phones(raw.events, n_samples=len(raw.audio), sr=raw.sr)
             spans = word_spans(ph, piece.toks, lang=code)
             ws = [w for _, w in spans]
             word_item += [piece.items[k] for k, _ in spans]
