@@ -305,7 +305,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     from mimika.speech import espeak, sphinx
     from mimika.speech.tts import split_sentences
     from mimika.speech.vad import activity, pad, refine_edges, unpad
-    from mimika.speech.words import assign_phones, tokens
+    from mimika.speech.words import Token, as_read, assign_phones, tokens
 
     if engine not in ENGINES:
         raise ParameterError(f"engine={engine!r} must be one of {', '.join(ENGINES)}")
@@ -315,7 +315,8 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     if not isinstance(transcript, str) or not transcript.strip():
         raise ParameterError("transcript is empty; give the words spoken in the recording")
     code = espeak.check_lang(lang)
-    toks = tokens(transcript)
+    toks = [Token(t.text, t.offset, as_read(t.text) if as_read(t.text) != t.text else None)
+            for t in tokens(transcript)]
     if not toks:
         raise ParameterError("transcript has no words; give the words spoken in the recording")
     act = activity(a, sr=sr)
@@ -330,7 +331,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
             log.warning("%s; aligning by DTW instead", e)
             use = "dtw"
     if use == "dtw":
-        phones, cost = _dtw_phones(a, int(sr), transcript, code, voice, act)
+        phones, cost = _dtw_phones(a, int(sr), as_read(transcript), code, voice, act)
         owner = assign_phones(phones, toks, lang=code)
         meta["alignment_cost"] = round(cost, 4)
     phones, owner = pad(phones, owner)

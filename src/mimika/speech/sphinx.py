@@ -92,7 +92,15 @@ def _pronunciation(token: Token, lang: str) -> str:
     arpa = dict(t["from_espeak"])
     if lang not in t["rhotic_langs"]:
         arpa.update(t["non_rhotic"])
-    return " ".join(arpa[s] for s, _ in phonemize(token.say, lang=lang) if s in arpa)
+    out = []
+    for sym, _ in phonemize(token.say, lang=lang):
+        if sym in arpa:
+            out.append(arpa[sym])
+        else:  # another language's phoneme: the English phone of its mouth class
+            from mimika.speech.phonemes import classify
+
+            out += [t["by_class"].get(c, "") for c in classify(sym, lang=lang)]
+    return " ".join(x for x in out if x)
 
 
 def _dict_word(dec: Any, token: Token, lang: str) -> str:

@@ -74,6 +74,16 @@ def tokens(text: str, *, offset: int = 0) -> list[Token]:
     return out
 
 
+_CURRENCY = re.compile(r"([$€£¥])\s?(\d[\d.,]*\d|\d)")
+
+
+def as_read(text: str) -> str:
+    """How a person reads ``text`` aloud where espeak-ng reads it differently: a currency sign
+    before an amount is said after it (``$100`` → ``100 $``, "one hundred dollars"; espeak-ng
+    says "dollar one hundred"). For aligning recordings; synthesis keeps espeak's reading."""
+    return _CURRENCY.sub(r"\2 \1", text)
+
+
 def _strip(sym: str) -> tuple[str, int]:
     stress = 0
     while sym and sym[0] in "',%=":
