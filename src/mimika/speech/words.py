@@ -54,7 +54,8 @@ def _trim(tok: str, start: int) -> tuple[str, int]:
     core = tok[i:j]
     while core.endswith("."):
         body = core[:-1]
-        if "." in body.strip(".") or body.lower() in _ABBREV:
+        if body.lower() in _ABBREV or ("." in body.strip(".")
+                                        and not any(c.isdigit() for c in body)):
             break
         core = body.rstrip(_TRAIL)
     return core, start + i
