@@ -65,7 +65,10 @@ def _decoder(kind: str) -> Any:
     except ImportError as e:
         raise DataError("English alignment and phone recognition need pocketsphinx: "
                         "pip install 'pocketsphinx==5.1.1'") from e
-    kw: dict[str, Any] = {"samprate": SR, "loglevel": "FATAL", "bestpath": False}
+    # silprob 0.1 (default 0.005): real recordings pause between words; an optional silence
+    # that is likely enough keeps a stop's closure from swallowing the pause before it
+    kw: dict[str, Any] = {"samprate": SR, "loglevel": "FATAL", "bestpath": False,
+                          "silprob": 0.1}
     if kind == "phones":
         # a weak phone language model (lw 1 instead of ≈ 6.5) lets the acoustics decide: on the
         # GRID dev set it doubles the /p b m/ that are heard (bench_align_real.py --audio-only)
