@@ -24,6 +24,7 @@ after the second word).
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 import time
@@ -91,11 +92,18 @@ def degrade(a: np.ndarray, sr: int, truth, cond: str, rng: np.random.Generator):
     raise SystemExit(f"unknown condition {cond!r}")
 
 
+@functools.cache
+def _baseline_decoder():
+    import pocketsphinx
+
+    return pocketsphinx.Decoder(samprate=16000, loglevel="FATAL")
+
+
 def pocketsphinx_words(a: np.ndarray, sr: int, words: list[str]):
     """pocketsphinx 5.1.1 out of the box: word segmentation of its forced alignment."""
     from mimika.speech import sphinx
 
-    dec = sphinx._decoder("baseline")
+    dec = _baseline_decoder()
     pcm = sphinx._pcm(a, sr)
     dec.set_align_text(" ".join(words))
     sphinx._decode(dec, pcm)
