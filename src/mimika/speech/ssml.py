@@ -161,7 +161,7 @@ def _pieces(items: Sequence[Item], *, sr: int, base: Path | None) -> list[_Piece
     stack: list[tuple[str, str]] = []  # (open tag as written for espeak, close tag)
     skip = 0  # inside an element whose text is not spoken
     sub: list[tuple[int, str]] = []  # (item index of the sub's first text, alias)
-    spoken: list[str | None] = []  # say-as / phoneme replacement of the words inside
+    spoken: list[str | None] = []  # how the words inside a say-as are read
     i = 0
     while i < len(items):
         it = items[i]
@@ -182,7 +182,8 @@ def _pieces(items: Sequence[Item], *, sr: int, base: Path | None) -> list[_Piece
         attrs = it[2] if len(it) > 2 else {}
         if kind in ("open", "empty") and tag == "audio" and attrs.get("src"):
             a = _read_audio(attrs["src"], base, sr)
-            if a is not None:
+            if a is not None:  # close what is open, splice, reopen it after the sound
+                cur.body += [c for _, c in reversed(stack)]
                 pieces.append(_Piece(audio=a))
                 pieces.append(_Piece(body=[o for o, _ in stack]))
                 if kind == "open":  # skip the fallback content
