@@ -119,11 +119,17 @@ def align_article(article: Article, audio: np.ndarray, *, sr: int, lang: str = "
         from mimika.speech.ssml import items_from_speech
 
         items = items_from_speech(article.script.speech)
-        text, item_of = "", []
+        text, item_of, alias = "", [], None
         for k, it in enumerate(items):
-            if it[0] == "text":
-                text += it[1]
-                item_of += [k] * len(it[1])
+            if it[0] == "open" and it[1] == "sub":  # the recording says the alias
+                alias = f" {it[2].get('alias', '')} "
+            elif it[0] == "close" and it[1] == "sub":
+                alias = None
+            elif it[0] == "text":
+                said = it[1] if alias is None else alias
+                alias = "" if alias is not None else None
+                text += said
+                item_of += [k] * len(said)
         utt = align(audio, sr=sr, transcript=text, lang=lang)
         from mimika.speech.ssml import _positions
 
