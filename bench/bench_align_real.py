@@ -107,8 +107,8 @@ def pocketsphinx_words(a: np.ndarray, sr: int, words: list[str]):
     pcm = sphinx._pcm(a, sr)
     dec.set_align_text(" ".join(words))
     sphinx._decode(dec, pcm)
-    return [(s.word, s.start_frame / 100, (s.end_frame + 1) / 100) for s in dec.seg()
-            if not s.word.startswith(("<", "[", "+"))]
+    return [(s.word, s.start_frame / 100, (s.end_frame + 1) / 100) for s in dec.seg() or []
+            if not s.word.startswith(("<", "[", "+"))]  # no segmentation: alignment failed
 
 
 def run_engine(engine: str, a, sr, truth):
