@@ -9,11 +9,12 @@ and condition it aligns the transcript and prints, per engine:
   reference interval of the word it belongs to;
 * warm compute in seconds per second of audio.
 
-Engines: ``pocketsphinx`` (its word segmentation as is, the baseline), ``sphinx`` (mimika's
-English engine: pocketsphinx + written-word pronunciations + edge refinement), ``dtw``
-(mimika's language-independent engine). Conditions degrade the real recordings: ``clean``,
-``edge`` (0–2 s of silence added at both ends, plus low noise), ``noise20``/``noise10`` (white
-noise at 20/10 dB SNR), ``quiet``/``loud`` (−20 dB / +12 dB with clipping), ``slow``/``fast``
+Engines: ``pocketsphinx`` (its word segmentation as is, the baseline), ``auto`` (what
+``align`` does for English: mimika's pocketsphinx engine — written-word pronunciations, silence
+between words, edge refinement — falling back to DTW when pocketsphinx fails), ``sphinx``
+(that engine without the fallback), ``dtw`` (mimika's language-independent engine).
+Conditions degrade the real recordings: ``clean``, ``edge`` (0–2 s of silence added at both
+ends, plus low noise), ``noise20``/``noise10`` (white noise at 20/10 dB SNR), ``quiet``/``loud`` (−20 dB / +12 dB with clipping), ``slow``/``fast``
 (resampled to 0.9×/1.1× speed: pitch and formants move too), ``pause`` (0.4 s silence inserted
 after the second word).
 
@@ -45,6 +46,7 @@ from mimika.speech.coarticulation import bilabial_apex_times
 _GRID = Path("shared", "speech", "grid-s1-dev")
 DEFAULT_DIR = next((p / _GRID for p in Path(__file__).resolve().parents if (p / _GRID).is_dir()),
                    _GRID)
+FALLBACKS: dict[str, int] = {}  #: alignments where ``auto`` fell back to DTW
 CONDITIONS = ("clean", "edge", "noise20", "noise10", "quiet", "loud", "slow", "fast", "pause")
 
 
@@ -118,6 +120,8 @@ def run_engine(engine: str, a, sr, truth):
         ws = pocketsphinx_words(a, sr, [w for w, _, _ in truth])
         return [(s, e) for _, s, e in ws], []
     u = align(a, sr=sr, transcript=text, lang="en", engine=engine)
+    if engine == "auto" and u.meta["engine"] == "dtw":
+        FALLBACKS[engine] = FALLBACKS.get(engine, 0) + 1
     spans = [(w.start, w.end) for w in u.words]
     apex = []
     for t in bilabial_apex_times(u):
@@ -170,7 +174,7 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=200, help="utterances (first N by name)")
     ap.add_argument("--conditions", default="clean,edge,noise20,noise10,quiet,loud,slow,fast,"
                                             "pause")
-    ap.add_argument("--engines", default="pocketsphinx,sphinx,dtw")
+    ap.add_argument("--engines", default="pocketsphinx,auto,dtw")
     ap.add_argument("--audio-only", action="store_true",
                     help="also measure lip-sync without a transcript (clean audio)")
     args = ap.parse_args()
@@ -192,6 +196,7 @@ def main() -> None:
         for eng in engines:
             errs, inside, n_apex, secs, audio_s, fails = [], 0, 0, 0.0, 0.0, 0
             run_engine(eng, data[0][1], data[0][3], data[0][2])  # warm-up
+            FALLBACKS.clear()
             for _i, a, truth, sr in data:
                 t0 = time.perf_counter()
                 spans, apex = run_engine(eng, a, sr, truth)
@@ -209,7 +214,8 @@ def main() -> None:
             clos = f"{100 * inside / n_apex:8.1f}%" if n_apex else f"{'—':>9}"
             print(f"{cond:<9} {eng:<13} {np.median(e):5.1f}ms {np.percentile(e, 90):4.0f}ms "
                   f"{100 * np.mean(e <= 50):5.1f}% {clos} {secs / audio_s:8.4f}"
-                  + (f"  ({fails} failed)" if fails else ""), flush=True)
+                  + (f"  ({fails} failed)" if fails else "")
+                  + (f"  ({FALLBACKS[eng]} by DTW)" if FALLBACKS.get(eng) else ""), flush=True)
         if args.audio_only and cond == "clean":
             audio_only(data)
 

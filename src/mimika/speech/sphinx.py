@@ -69,6 +69,8 @@ def _decoder(kind: str) -> Any:
     # that is likely enough keeps a stop's closure from swallowing the pause before it
     kw: dict[str, Any] = {"samprate": SR, "loglevel": "FATAL", "bestpath": False,
                           "silprob": 0.1}
+    if kind == "align-wide":  # the retry when the default beams lose the transcript (noise)
+        kw.update(beam=1e-80, wbeam=1e-60, pbeam=1e-80)
     if kind == "phones":
         # a weak phone language model (lw 1 instead of ≈ 6.5) lets the acoustics decide: on the
         # GRID dev set it doubles the /p b m/ that are heard (bench_align_real.py --audio-only)
@@ -154,18 +156,23 @@ def force_align(audio: np.ndarray, *, sr: int, toks: list[Token], lang: str = "e
     pcm = _pcm(audio, sr)
     dur = len(audio) / sr
     with _LOCK:
-        dec = _decoder("align")
-        words = [_dict_word(dec, t, lang) for t in toks]
-        try:
-            dec.set_align_text(" ".join(words))
-            _decode(dec, pcm)
-            dec.set_alignment()
-            _decode(dec, pcm)
-            al = dec.get_alignment()
-            items = [(w.name, [(p.name, p.start, p.duration) for p in w]) for w in al]
-        except RuntimeError as e:
+        items = None
+        for kind in ("align", "align-wide"):
+            dec = _decoder(kind)
+            words = [_dict_word(dec, t, lang) for t in toks]
+            try:
+                dec.set_align_text(" ".join(words))
+                _decode(dec, pcm)
+                dec.set_alignment()
+                _decode(dec, pcm)
+                items = [(w.name, [(p.name, p.start, p.duration) for p in w])
+                         for w in dec.get_alignment()]
+                break
+            except RuntimeError as e:
+                err = e
+        if items is None:
             raise ParameterError(f"pocketsphinx cannot align the transcript to the audio "
-                                 f"({e})") from None
+                                 f"({err})") from None
     phones: list[Phone] = []
     owner: list[int] = []
     k = 0
