@@ -14,12 +14,12 @@ Engines: ``pocketsphinx`` (its word segmentation as is, the baseline), ``auto`` 
 between words, edge refinement — falling back to DTW when pocketsphinx fails), ``sphinx``
 (that engine without the fallback), ``dtw`` (mimika's language-independent engine).
 Conditions degrade the real recordings: ``clean``, ``edge`` (0–2 s of silence added at both
-ends, plus low noise), ``noise20``/``noise10`` (white noise at 20/10 dB SNR), ``quiet``/``loud`` (−20 dB / +12 dB with clipping), ``slow``/``fast``
-(resampled to 0.9×/1.1× speed: pitch and formants move too), ``pause`` (0.4 s silence inserted
-after the second word).
+ends, plus low noise), ``noise20``/``noise10`` (white noise at 20/10 dB SNR), ``quiet``/
+``loud`` (−20 dB / +12 dB with clipping), ``slow``/``fast`` (resampled to 0.9×/1.1× speed:
+pitch and formants move too), ``pause`` (0.4 s silence inserted after the second word).
 
     .venv/bin/python bench/bench_align_real.py [--n 200] [--conditions clean,edge,…]
-        [--engines pocketsphinx,sphinx,dtw] [--audio-only]
+        [--engines pocketsphinx,auto,dtw] [--audio-only]
 """
 
 from __future__ import annotations
