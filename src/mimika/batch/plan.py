@@ -85,7 +85,8 @@ class Plan:
                 "animation": None if s.animation is None else {
                     "onset": s.animation.onset, "apex": s.animation.apex,
                     "offset": s.animation.offset, "fps": s.animation.fps,
-                    "ease": s.animation.ease}}
+                    "ease": s.animation.ease, "speech": s.animation.speech,
+                    "audio": s.animation.audio, "lang": s.animation.lang}}
 
 
 @lru_cache(maxsize=8)

@@ -37,7 +37,7 @@ TOP_KEYS = ("name", "aus", "expressions", "intensities", "neutral", "sample", "h
             "identities", "views", "size", "samples", "blend", "disabled_rules", "seed",
             "animation")
 SAMPLE_KEYS = ("count", "pool", "min_aus", "max_aus", "range", "levels")
-ANIMATION_KEYS = ("onset", "apex", "offset", "fps", "format", "ease")
+ANIMATION_KEYS = ("onset", "apex", "offset", "fps", "format", "ease", "speech", "audio", "lang")
 
 
 class SpecError(DataError):
@@ -71,6 +71,11 @@ class AnimationSpec:
     #: auto (mp4 where PyAV video output is available, else gif) | mp4 | gif | strip
     format: str = "auto"
     ease: str | None = None
+    #: spoken clips: the text (lip-sync; the item's AUs rise over ``onset`` and fall over
+    #: ``offset`` around it), a recording of it (absolute path; else espeak-ng) and its language
+    speech: str | None = None
+    audio: str | None = None
+    lang: str = "en"
 
     @property
     def duration(self) -> float:
@@ -403,7 +408,35 @@ def _sample(c: _Checker, v: Any) -> SampleSpec:
                       levels=levels)
 
 
-def _animation(c: _Checker, v: Any, size: tuple[int, int]) -> AnimationSpec | None:
+def _speech(c: _Checker, d: Mapping[str, Any], base: Path | None) -> dict[str, Any]:
+    """``speech``/``audio``/``lang`` of a spoken clip (audio paths relative to the spec)."""
+    a = ("animation",)
+    kw: dict[str, Any] = {}
+    if "speech" in d:
+        if not isinstance(d["speech"], str) or not d["speech"].strip():
+            raise c.error((*a, "speech"), "speech must be the text to speak")
+        kw["speech"] = d["speech"]
+    if "audio" in d:
+        if "speech" not in kw:
+            raise c.error((*a, "audio"), "audio needs speech: the text spoken in the recording")
+        path = Path(str(d["audio"])).expanduser()
+        if not path.is_absolute() and base is not None:
+            path = base / path
+        if not path.is_file():
+            raise c.error((*a, "audio"), f"recording {str(path)!r} does not exist")
+        kw["audio"] = str(path.resolve())
+    if "lang" in d:
+        from mimika.speech.espeak import check_lang
+
+        try:
+            kw["lang"] = check_lang(str(d["lang"]))
+        except MimikaError as e:
+            raise c.error((*a, "lang"), str(e)) from None
+    return kw
+
+
+def _animation(c: _Checker, v: Any, size: tuple[int, int], base: Path | None = None
+               ) -> AnimationSpec | None:
     if v is None or v is False:
         return None
     if v is True:
@@ -432,6 +465,7 @@ def _animation(c: _Checker, v: Any, size: tuple[int, int]) -> AnimationSpec | No
             kw["ease"] = check_easing(str(d["ease"]))
         except MimikaError as e:
             raise c.error((*a, "ease"), str(e)) from None
+    kw.update(_speech(c, d, base))
     spec = AnimationSpec(**kw)
     if spec.duration <= 0:
         raise c.error(a, "onset + apex + offset must be > 0 seconds")
@@ -552,7 +586,8 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
         kw["disabled_rules"] = tuple(rules)
     if "seed" in d:
         kw["seed"] = c.number(d["seed"], ("seed",), lo=0, integer=True)
-    kw["animation"] = _animation(c, d.get("animation"), size)
+    kw["animation"] = _animation(c, d.get("animation"), size,
+                                 Path(base) if base is not None else None)
     spec = BatchSpec(source=source, lines=dict(lines or {}), **kw)
     if not (spec.aus or spec.aus_keyword or spec.expressions or spec.sample or spec.neutral):
         raise c.error((), "the spec renders nothing: give 'aus', 'expressions', 'sample' or "

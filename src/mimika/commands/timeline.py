@@ -16,7 +16,7 @@ INPUT_FORMATS = (*CSV_FORMATS, "pyfeat")
 READER_FLAGS = {"fill": ("fill", "--fill"), "source": ("source", "--from"),
                 "fps": ("take_fps", "--take-fps"), "scale": ("scale", "--scale"),
                 "timecodes": ("timecodes", "--timecodes"), "max_gap": ("max_gap", "--max-gap")}
-OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml")
+OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml", ".mp4")
 
 
 def _say(args, msg: str) -> None:
@@ -117,11 +117,34 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
     _say(args, f"wrote {out} ({len(idx)} frames)")
 
 
+def _render_video(args: argparse.Namespace, tl) -> int:
+    """A spoken video of a script: its speech through espeak-ng's SSML mode, lip-sync, the
+    script's events on the words they wrap, blinks and skin shading."""
+    from dataclasses import replace
+
+    from mimika.commands._util import progress_bar
+    from mimika.newsreader import parse_article, render_news
+
+    if Path(args.script).suffix.lower() == ".json":
+        raise ParameterError("an .mp4 needs a script with speech (.xml/.ssml/.txt), not a "
+                             "project")
+    text = Path(args.script).read_text("utf-8")
+    art = replace(parse_article(text, source=args.script), script=tl)
+    res = render_news(art, out=args.output, lang=args.lang, head=args.head,
+                      fps=float(args.fps or 25.0), layers=("blink", "skin"),
+                      voice=args.voice, audio=args.audio, mood=args.mood,
+                      progress=progress_bar(args.quiet, "rendering"))
+    _say(args, f"wrote {res.video} ({res.n_frames} frames, {res.duration:.2f} s of speech)")
+    return 0
+
+
 def cmd_render(args: argparse.Namespace) -> int:
     from mimika.timeline import sample
 
     tl, settings = _load_timeline(args.script, rate=args.rate)
     tl = _sync(args, tl)
+    if Path(args.output).suffix.lower() == ".mp4":
+        return _render_video(args, tl)
     fps = float(args.fps or settings.get("fps", 25.0))
     track = sample(tl, fps=fps, blend=args.blend or bool(settings.get("blend")))
     track = type(track)(track.values, track.channels, track.fps,
@@ -215,7 +238,7 @@ def cmd_project(args: argparse.Namespace) -> int:
 def _common(p, *, head: bool = True) -> None:
     p.add_argument("-o", "--output", required=True,
                    help="output: .glb/.gltf (animated head), .csv (--format), .png (frames), "
-                        ".json (project), .xml (script)")
+                        ".json (project), .xml (script), .mp4 (spoken video; render only)")
     p.add_argument("--format", choices=CSV_FORMATS,
                    help="CSV layout: au (time,AU01,…; default), openface, arkit (Live Link Face)")
     p.add_argument("--fps", type=float, help="frames per second (default: project or 25)")
@@ -238,6 +261,10 @@ def register(sub) -> None:
                    help="knowledge-base timing rules: warn (default), clamp, error or off")
     r.add_argument("--rate", type=float, help="seconds per vowel unit for text timing (0.16)")
     r.add_argument("-v", "--verbose", action="store_true", help="also show suggestions")
+    r.add_argument("--lang", default="en", help="espeak language of the speech (.mp4; en)")
+    r.add_argument("--voice", help="espeak voice variant (.mp4)")
+    r.add_argument("--audio", metavar="FILE", help="a recording of the script's text (.mp4)")
+    r.add_argument("--mood", help="mood of the behaviour (.mp4; default the script's)")
     r.set_defaults(func=cmd_render)
 
     p = sub.add_parser("replay", help="replay a recorded take (Live Link Face / OpenFace / "
