@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
 
 VISEME_FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead")
@@ -146,6 +147,7 @@ def register(sub) -> None:
     q.add_argument("-o", "--output", metavar="FILE.wav", help="WAV file to write (16-bit mono)")
     q.add_argument("--timing", metavar="FILE.json", help="phoneme/word/sentence timing JSON")
     _outputs(q)
+    limit_options(q, "max_duration", "max_text")
     q.set_defaults(func=cmd_say)
 
     a = sub.add_parser("align", help="recorded speech + transcript → phoneme timing, AUs, visemes")

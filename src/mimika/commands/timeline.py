@@ -7,11 +7,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import size_arg
+from mimika.commands._util import limit_options, size_arg
 from mimika.errors import ParameterError
 
 CSV_FORMATS = ("au", "openface", "arkit")
 OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml")
+#: most tiles in a .png contact strip
+MAX_SHEET = 400
 
 
 def _say(args, msg: str) -> None:
@@ -110,6 +112,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     from mimika.timeline import sample
 
     tl, settings = _load_timeline(args.script, rate=args.rate)
+    if tl.end <= 0:
+        raise ParameterError(f"{args.script}: nothing to render: the script has no text, no "
+                             "element and no duration")
     tl = _sync(args, tl)
     fps = float(args.fps or settings.get("fps", 25.0))
     track = sample(tl, fps=fps, blend=args.blend or bool(settings.get("blend")))
@@ -121,9 +126,11 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     from mimika.io.tracks import read_track
+    from mimika.limits import check_frames
 
     kw = {"fill": args.fill} if args.fill else {}
     track = read_track(args.take, format=args.input_format, **kw)
+    check_frames(track.n_frames, f"take {args.take}")
     if args.fps:
         track = track.resample(fps=args.fps)
     meta = track.meta
@@ -198,9 +205,24 @@ def _common(p, *, head: bool = True) -> None:
     p.add_argument("--view", default="front", choices=("front", "three-quarter", "profile"),
                    help="camera for .png")
     p.add_argument("--size", type=size_arg, default=(320, 240), help="tile size for .png")
-    p.add_argument("--frames", type=int, default=8, help="frames in a .png contact strip")
-    p.add_argument("--columns", type=int, default=8, help="tiles per row in a .png")
+    p.add_argument("--frames", type=_count(MAX_SHEET), default=8,
+                   help=f"frames in a .png contact strip (1–{MAX_SHEET})")
+    p.add_argument("--columns", type=_count(MAX_SHEET), default=8, help="tiles per row in a .png")
     p.add_argument("-q", "--quiet", action="store_true")
+    limit_options(p, "max_duration", "max_frames", "max_text")
+
+
+def _count(top: int):
+    def parse(text: str) -> int:
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if not 1 <= n <= top:
+            raise argparse.ArgumentTypeError(f"{n} must be within 1…{top}")
+        return n
+
+    return parse
 
 
 def register(sub) -> None:
@@ -230,6 +252,7 @@ def register(sub) -> None:
     q.add_argument("--fps", type=float)
     q.add_argument("--blend", action="store_true")
     q.add_argument("-q", "--quiet", action="store_true")
+    limit_options(q, "max_duration", "max_frames", "max_text")
     q.set_defaults(func=cmd_plot)
 
     j = sub.add_parser("project", help="create, check or print project files")
@@ -239,4 +262,5 @@ def register(sub) -> None:
     j.add_argument("-o", "--output", help="file to write (new, script)")
     j.add_argument("--head", help="head setting (new)")
     j.add_argument("--fps", type=float, help="fps setting (new)")
+    limit_options(j, "max_duration", "max_text")
     j.set_defaults(func=cmd_project)
