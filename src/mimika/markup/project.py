@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from mimika.errors import DataError, MimikaError
-from mimika.io.atomic import atomic_write
+from mimika.io.atomic import atomic_write, sweep_stale
 from mimika.limits import check_json_tree, loads_json
 from mimika.timeline.model import (
     KINDS,
@@ -369,4 +369,5 @@ def save_project(project: Project, path: str | Path) -> Path:
     """Write ``project`` as JSON to ``path`` atomically; returns the path."""
     text = json.dumps(project_to_dict(project), indent=1, ensure_ascii=False,
                       allow_nan=False) + "\n"
+    sweep_stale(path)  # temp files of saves that were killed
     return atomic_write(path, text)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import tempfile
@@ -271,11 +272,12 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     # pad the audio to the video's length so both streams end together
     audio = np.zeros(round(n / fps * utt.sr), np.float32)
     audio[: min(len(audio), len(utt.audio))] = utt.audio[: len(audio)]
+    frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
+                           skin_shader="skin" in enabled, workers=workers, timings=tm)
+    # closing: an interrupted render stops its worker processes at once
     with VideoWriter(out, fps=fps, size=(w, h), audio=audio, sr=utt.sr, crf=crf,
-                     preset=preset) as vw:
-        for i, img in enumerate(render_frames(rig, track, size=(w, h), view=view,
-                                              samples=samples, skin_shader="skin" in enabled,
-                                              workers=workers, timings=tm)):
+                     preset=preset) as vw, contextlib.closing(frames):
+        for i, img in enumerate(frames):
             vw.write(img)
             if progress is not None:
                 progress(i + 1, n)

@@ -13,7 +13,6 @@ import contextlib
 import logging
 import os
 import queue
-import tempfile
 import threading
 import time
 from fractions import Fraction
@@ -23,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from mimika.errors import DataError, ParameterError, RenderError
+from mimika.io.atomic import make_temp, sweep_stale
 
 log = logging.getLogger(__name__)
 
@@ -76,12 +76,12 @@ class VideoWriter:
         self.encode_seconds = 0.0
         parent = self.path.parent if str(self.path.parent) else Path(".")
         try:
-            parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".mp4", dir=parent)
+            sweep_stale(self.path)  # temp files of renders that were killed
+            fd, tmp = make_temp(parent / self.path.name, suffix=".mp4")
             os.close(fd)
         except OSError as e:
             raise DataError(f"cannot write {str(self.path)!r}: {e.strerror or e}") from None
-        self._tmp = Path(tmp)
+        self._tmp = tmp
         try:
             self._c = av.open(str(self._tmp), mode="w", format="mp4")
             vs = self._c.add_stream("libx264", rate=self.fps)
@@ -165,11 +165,18 @@ class VideoWriter:
             self._encode(a, self.n_frames)
         self.n_frames += 1
 
-    def _join(self) -> None:
-        if self._thread is not None and self._thread.is_alive():
-            assert self._q is not None
-            self._q.put(_STOP)
-            self._thread.join()
+    def _join(self, *, abort: bool = False) -> None:
+        """Let the encoder thread finish (``abort``: skip what is queued) and wait for it —
+        before the container is closed, which must not happen while it encodes."""
+        if self._thread is None:
+            return
+        assert self._q is not None
+        if abort and self._err is None:
+            self._err = RenderError("the video was abandoned")
+        while self._thread.is_alive():
+            with contextlib.suppress(queue.Full):
+                self._q.put(_STOP, timeout=0.1)
+            self._thread.join(0.1)
 
     def close(self) -> Path:
         """Flush the encoders, finish the file and move it to :attr:`path`; returns it."""
@@ -191,17 +198,17 @@ class VideoWriter:
             os.chmod(self._tmp, 0o666 & ~umask)  # like a plain open(); mkstemp makes it 0600
             os.replace(self._tmp, self.path)
         except OSError as e:
-            self._discard()
+            self.abort()
             raise DataError(f"cannot write {str(self.path)!r}: {e.strerror or e}") from None
-        except BaseException:
-            self._discard()
+        except BaseException:  # also SIGTERM / Ctrl-C while waiting for the encoder
+            self.abort()
             raise
         log.info("wrote %s: %d frames at %s fps", self.path, self.n_frames, self.fps)
         return self.path
 
     def abort(self) -> None:
         """Stop and delete the temporary file; the target is left untouched."""
-        self._join()
+        self._join(abort=True)
         self._discard()
 
     def _discard(self) -> None:
