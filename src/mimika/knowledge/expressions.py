@@ -174,9 +174,9 @@ class ExpressionLibrary:
         where = str(self.path)
         try:
             data = loads_json(self.path.read_bytes(), where)
-        except OSError as e:
-            raise DataError(f"cannot read expression library {where!r}: {e}; fix or "
-                            "remove the file") from None
+        except (OSError, DataError) as e:
+            raise DataError(f"cannot read expression library: {e}; fix or remove the "
+                            "file") from None
         if not isinstance(data, dict) or not isinstance(data.get("expressions"), list):
             raise DataError(f"expression library {where!r} must be a JSON object with "
                             "an 'expressions' list")
