@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["atomic_open", "atomic_write", "make_temp", "sweep_stale"]
+__all__ = ["atomic_open", "atomic_write", "make_temp", "pid_alive", "sweep_stale"]
 
 
 def make_temp(path: str | os.PathLike, suffix: str = ".tmp") -> tuple[int, Path]:
@@ -22,7 +22,8 @@ def make_temp(path: str | os.PathLike, suffix: str = ".tmp") -> tuple[int, Path]
     return fd, Path(tmp)
 
 
-def _alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (or cannot be signalled: another user's)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -45,7 +46,7 @@ def sweep_stale(path: str | os.PathLike) -> int:
         return 0
     for e in entries:
         pid, _, rest = e.name[len(head):].partition(".")
-        if pid.isdigit() and rest and not _alive(int(pid)):
+        if pid.isdigit() and rest and not pid_alive(int(pid)):
             with contextlib.suppress(OSError):
                 os.unlink(e.path)
                 removed += 1

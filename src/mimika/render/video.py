@@ -15,6 +15,7 @@ import os
 import queue
 import threading
 import time
+from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -229,9 +230,12 @@ class VideoWriter:
 
 def write_track_video(rig: Any, track: Any, path: str | os.PathLike, *,
                       size: tuple[int, int] = (640, 480), view: str = "front", samples: int = 4,
-                      audio: np.ndarray | None = None, sr: int | None = None) -> Path:
+                      audio: np.ndarray | None = None, sr: int | None = None,
+                      progress: Callable[[int, int], None] | None = None) -> Path:
     """Render the AU ``track`` on ``rig``'s head into an H.264 (+ AAC with ``audio``) MP4 at
-    ``track.fps``, written atomically. Channels the rig does not model are left out."""
+    ``track.fps``, written atomically. Channels the rig does not model are left out.
+    ``progress(done, total)`` is called after every frame; an exception it raises stops the
+    render and leaves no file."""
     from mimika.render import Renderer
 
     w, h = (int(s) // 2 * 2 for s in size)
@@ -239,8 +243,10 @@ def write_track_video(rig: Any, track: Any, path: str | os.PathLike, *,
     track = track.with_channels(keep)
     with Renderer(rig.head, size=(w, h), samples=samples) as r, \
             VideoWriter(path, fps=track.fps, size=(w, h), audio=audio, sr=sr) as out:
-        for pos in rig.deform_track(track):
+        for i, pos in enumerate(rig.deform_track(track)):
             out.write(r.render(pos, view=view))
+            if progress is not None:
+                progress(i + 1, track.n_frames)
     return Path(path)
 
 
