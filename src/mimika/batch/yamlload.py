@@ -53,6 +53,31 @@ def _loader_class(yaml: Any, lim: limits.Limits) -> type:
     return Loader
 
 
+def _flow_too_deep(text: str, max_depth: int) -> int:
+    """The line where ``[``/``{`` nesting (outside quotes and comments) passes ``max_depth``,
+    else 0 — a linear pre-scan before the parser sees it."""
+    depth, line, quote = 0, 1, ""
+    prev = "\n"
+    for ch in text:
+        if quote:
+            if ch == quote:
+                quote = ""
+            elif ch == "\n":
+                line += 1
+        elif ch in "[{":
+            depth += 1
+            if depth > max_depth:
+                return line
+        elif ch in "]}":
+            depth = max(depth - 1, 0)
+        elif ch in "'\"" and prev in " \t\n[{,:":
+            quote = ch
+        elif ch == "\n":
+            line += 1
+        prev = ch
+    return 0
+
+
 def _error(error: type[DataError], source: str, line: int | None, msg: str) -> DataError:
     return error(f"{source}:{line}: {msg}" if line else f"{source}: {msg}")
 
@@ -74,6 +99,10 @@ def read_yaml(text: str, source: str, *, error: type[DataError] = DataError
         limits.check_text(text, f"spec {source}")
     except limits.LimitError as e:
         raise error(f"{source}: {e}") from None
+    deep_line = _flow_too_deep(text, lim.max_depth)
+    if deep_line:  # PyYAML's scanner is quadratic in the depth of [ and { nesting
+        raise _error(error, source, deep_line, str(limits.over(
+            "max_depth", f"the spec is nested more than {lim.max_depth} levels deep", lim)))
     lines: dict[Path_, int] = {}
     try:
         loader = _loader_class(yaml, lim)(text)
@@ -93,9 +122,40 @@ def read_yaml(text: str, source: str, *, error: type[DataError] = DataError
             raise error(f"{where}: invalid YAML: {problem}") from None
         if root is None:
             return None, lines
+        _check_expansion(yaml, root, source, lim, error)
         return _Converter(yaml, loader, source, lines, lim, error).conv(root, ()), lines
     finally:
         loader.dispose()
+
+
+def _check_expansion(yaml: Any, root: Any, source: str, lim: limits.Limits,
+                     error: type[DataError]) -> None:
+    """Refuse a node graph that aliases expand past ``max_nodes`` values, or that contains
+    itself — counted over the shared nodes, without expanding anything."""
+    size: dict[int, int] = {}
+    stack: list[tuple[Any, bool]] = [(root, False)]
+    open_: set[int] = set()
+    while stack:
+        node, done = stack.pop()
+        key = id(node)
+        kids = ([v for kv in node.value for v in kv] if isinstance(node, yaml.MappingNode)
+                else node.value if isinstance(node, yaml.SequenceNode) else [])
+        if done:
+            open_.discard(key)
+            size[key] = 1 + sum(size[id(k)] for k in kids)
+            if size[key] > lim.max_nodes:
+                raise _error(error, source, node.start_mark.line + 1, str(limits.over(
+                    "max_nodes", "the spec, with its aliases expanded, has over "
+                                 f"{lim.max_nodes} values", lim)))
+            continue
+        if key in size:
+            continue
+        if key in open_:
+            raise _error(error, source, node.start_mark.line + 1,
+                         "an alias refers to the value that contains it (an endless loop)")
+        open_.add(key)
+        stack.append((node, True))
+        stack.extend((k, False) for k in kids if id(k) not in size)
 
 
 class _Converter:
@@ -138,6 +198,10 @@ class _Converter:
             raise self.fail(node, path, str(limits.over(
                 "max_nodes", f"the spec (with its aliases expanded) has over "
                              f"{self.lim.max_nodes} values", self.lim)))
+        if len(path) > self.lim.max_depth:  # an alias inside itself nests forever
+            raise self.fail(node, path[:3], str(limits.over(
+                "max_depth", "the spec (with its aliases expanded) is nested more than "
+                             f"{self.lim.max_depth} levels deep", self.lim)))
         self.lines.setdefault(path, node.start_mark.line + 1)
         if isinstance(node, yaml.MappingNode):
             out: dict[Any, Any] = {}
