@@ -20,6 +20,7 @@ test: setup
 	bash scripts/setup-node.sh
 	bash scripts/setup-studio.sh
 	bash scripts/setup-browser.sh
+	bash scripts/setup-blender.sh
 	$(BIN)/ruff check src tests bench
 	$(BIN)/python -m pytest -q
 

@@ -18,7 +18,7 @@ from _common import ict_available, report, single_core
 
 single_core()
 
-from mimika.face.fit import FitOptions, fit_ict
+from mimika.face.fitting import FitOptions, fit_ict
 
 DEFAULT_AUS = ["AU01", "AU12", "AU27", "AU45"]
 

@@ -1,4 +1,5 @@
-"""Newsreader benchmark: a ~30-second bulletin → MP4, per stage, for the built-in and ICT heads.
+"""Newsreader benchmark: a ~30-second bulletin → MP4, per stage, for the default character, the
+built-in head and ICT.
 
 Prints frames/s of every stage in one process (wall and CPU time: on a shared machine the CPU
 seconds are the steadier figure), then renders the whole bulletin end to end as ``mimika news``
@@ -6,7 +7,7 @@ does (rendering spread over one process per core) and prints its wall time again
 duration (ratio < 1 = faster than real time). ICT runs when ``MIMIKA_ICT_DIR`` points at
 ICT-FaceKit.
 
-    python bench/bench_news.py [--size 640x480] [--frames N] [--heads builtin,ict] [--no-e2e]
+    python bench/bench_news.py [--size 640x480] [--frames N] [--heads amara,builtin,ict] [--no-e2e]
 """
 
 from __future__ import annotations
@@ -24,9 +25,8 @@ import numpy as np
 
 from mimika.face.heads import load_head
 from mimika.newsreader import example_bulletin, news_track, parse_article, speak_article
-from mimika.newsreader.pipeline import FILL
+from mimika.newsreader.pipeline import news_camera
 from mimika.render import Renderer
-from mimika.render.camera import frame_head
 from mimika.render.skin import NEWS_LIGHTING, SkinParams
 from mimika.render.video import VideoWriter
 
@@ -59,7 +59,7 @@ def bench_head(name: str, *, size: tuple[int, int], frames: int | None, skin: bo
     clk.lap()
     pos = rig.deform_batch(vals, track.channels)
     t_deform = clk.lap()
-    cam = frame_head(rig.head, "front", aspect=size[0] / size[1], fill=FILL)
+    cam = news_camera(rig.head, "front", size[0] / size[1])
     imgs = []
     skin_params = SkinParams(refresh=3) if skin else False  # as the newsreader renders video
     with Renderer(rig.head, size=size, samples=0, skin_shader=skin_params,
@@ -115,7 +115,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", default="640x480")
     ap.add_argument("--frames", type=int, default=150, help="frames to render (0: all)")
-    ap.add_argument("--heads", default="builtin,ict")
+    ap.add_argument("--heads", default="amara,builtin,ict")
     ap.add_argument("--no-skin", action="store_true")
     ap.add_argument("--no-e2e", action="store_true", help="skip the end-to-end run")
     a = ap.parse_args()

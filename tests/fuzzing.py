@@ -370,6 +370,10 @@ def _cell(r: R) -> str:
                          text(r, 5)]))
 
 
+PYFEAT = ["FaceRectX", "FaceRectY", "FaceRectWidth", "FaceRectHeight", "FaceScore", "Pitch",
+          "Roll", "Yaw", "input", "frame", "approx_time"]
+
+
 def _tc(seconds: int, frame: int, ms: int) -> str:
     h, m, sec = seconds // 3600 % 24, seconds // 60 % 60, seconds % 60
     return f"{h:02d}:{m:02d}:{sec:02d}:{frame:02d}.{ms:03d}"
@@ -385,9 +389,9 @@ def _timecode(r: R) -> str:
 def gen_csv(r: R) -> tuple[str, str | None]:
     from mimika.io.arkit import LIVELINK_COLUMNS
 
-    fmt = r.choice(["au", "openface", "arkit", "garbage"])
+    fmt = r.choice(["au", "openface", "arkit", "pyfeat", "garbage"])
     if fmt == "garbage":
-        return text(r, 200), r.choice([None, "au", "openface", "arkit"])
+        return text(r, 200), r.choice([None, "au", "openface", "arkit", "pyfeat"])
     mutating(r)
     if fmt == "au":
         header = ["time", *dict.fromkeys(r.choice(["AU01", "AU12", "AU12L", "au6"]) if not bad(r)
@@ -399,6 +403,10 @@ def gen_csv(r: R) -> tuple[str, str | None]:
             else r.choice(["AU99_r", "AU1_r", "x"]) for _ in range(r.randint(1, 3)))]
         if bad(r):
             r.shuffle(header)
+    elif fmt == "pyfeat":
+        header = [*PYFEAT, *dict.fromkeys(r.choice(["AU01", "AU12", "AU43", "mouthSmileLeft",
+                                                     "browDownLeft", "jawOpen", "eyeBlinkLeft",
+                                                     "gaze_yaw", "AU99"]) for _ in range(4))]
     else:
         header = list(LIVELINK_COLUMNS)
     step = r.choice([1 / 30, 1 / 25, 1 / 60]) if not bad(r) else r.choice([0.0, -0.1, 1e6])
@@ -415,8 +423,15 @@ def gen_csv(r: R) -> tuple[str, str | None]:
                     row.append(_timecode(r))
             elif h in ("time", "timestamp") and not bad(r):
                 row.append(f"{t:.3f}")
+            elif h == "approx_time" and not bad(r):
+                row.append(f"00:{int(t) % 60:02d}")
+            elif h == "input" and not bad(r):
+                row.append("v.mp4")
+            elif h in ("FaceRectWidth", "FaceRectHeight") and not bad(r):
+                row.append("100")
             elif h in ("frame", "face_id", "success", "BlendShapeCount") and not bad(r):
-                row.append({"frame": str(i + 1), "face_id": "0", "success": "1",
+                row.append({"frame": str(i + 1 if fmt != "pyfeat" else 2 * i), "face_id": "0",
+                            "success": "1",
                             "BlendShapeCount": "61"}[h])
             elif not bad(r):
                 row.append(f"{r.random():.3f}")
@@ -425,6 +440,9 @@ def gen_csv(r: R) -> tuple[str, str | None]:
         if bad(r):
             row = row[:r.randint(0, len(row))]
         rows.append(",".join(row))
+    if len(rows) > 1 and bad(r):  # rows out of order (issue 20: swapped timecodes)
+        i, j = r.sample(range(len(rows)), 2)
+        rows[i], rows[j] = rows[j], rows[i]
     return "\n".join([",".join(header), *rows]) + "\n", r.choice([None, None, fmt])
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from mimika import DataError, ParameterError
-from mimika.face.field import (
+from mimika.face.head import Head, MeshObject, Part
+from mimika.face.rigs.field import (
     Cubic,
     FieldRig,
     Gaussian,
@@ -16,7 +17,6 @@ from mimika.face.field import (
     load_fields,
     parse_fields,
 )
-from mimika.face.head import Head, MeshObject, Part
 
 
 def grid_head(n: int = 21) -> Head:

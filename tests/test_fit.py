@@ -1,4 +1,4 @@
-"""Fitting seed-002 fields (mimika.face.fit): synthetic recovery, real ICT data, transfer,
+"""Fitting seed-002 fields (mimika.face.fitting): synthetic recovery, real ICT data, transfer,
 identities, the frame rotation / RBF extensions of the fields file, CLI errors."""
 
 from __future__ import annotations
@@ -10,8 +10,7 @@ import pytest
 
 from conftest import needs_ict
 from mimika.errors import DataError, ParameterError
-from mimika.face.field import Cubic, FieldRig, Gaussian, LinearField, parse_fields
-from mimika.face.fit import (
+from mimika.face.fitting import (
     FitOptions,
     fit_field,
     fit_phi,
@@ -20,6 +19,7 @@ from mimika.face.fit import (
     similarity_transform,
     transfer_fields,
 )
+from mimika.face.rigs.field import Cubic, FieldRig, Gaussian, LinearField, parse_fields
 
 
 def _surface(rng, n=600):
@@ -161,7 +161,7 @@ def ict_fit():
 
     if ict_dir() is None:
         pytest.skip("MIMIKA_ICT_DIR not set: no ICT data")
-    from mimika.face.fit import fit_ict
+    from mimika.face.fitting import fit_ict
 
     return fit_ict(aus=["AU12", "AU27"], options=FitOptions(
         family="rich", psi_evals=2000, phi_evals=1500, max_vertices=800))
@@ -190,7 +190,7 @@ def test_real_fit_under_error_bound(ict_fit):
 
 def _face_errors(doc: dict, codes) -> dict[str, float]:
     """e/d_max over all moving ICT face vertices (≥ 5 % of d_max) of ``doc`` on the ICT head."""
-    from mimika.face.blendshape import load_ict_rig
+    from mimika.face.heads.ict import load_ict_rig
 
     rig = load_ict_rig()
     head = rig.head
@@ -217,9 +217,8 @@ def test_transfer_to_builtin_moves_landmarks_alike(ict_fit, builtin_rig, ict_rig
 
 @needs_ict
 def test_identities_change_shape_but_aus_still_move(ict_fit):
-    from mimika.face.blendshape import load_ict_rig
-    from mimika.face.fit import load_fitted_rig
-    from mimika.face.ict import identity_weights, load_ict_head
+    from mimika.face.fitting import load_fitted_rig
+    from mimika.face.heads.ict import identity_weights, load_ict_head, load_ict_rig
 
     base = load_ict_head()
     rig = load_ict_rig(identity=[0, 2.0, -1.5])

@@ -100,6 +100,24 @@ def test_glb_plays_in_threejs(glb, small_rig, track):
     assert out["skinned"] > 0
 
 
+def test_timing_extras_and_node_names_for_blender(small_rig, track):
+    doc, _ = build_gltf(small_rig, track)
+    last = track.n_frames - 1
+    want = {"fps": 25.0, "frame_start": 0, "frame_end": last, "duration_s": last / 25}
+    assert doc["scenes"][0]["extras"] == want == doc["animations"][0]["extras"]
+    names = {n["name"] for n in doc["nodes"]}
+    meshes = {m["name"] for m in doc["meshes"]}
+    # a skinned node with morph animation: Blender splits it into an empty (node name) and a
+    # mesh object (mesh name), so the two differ and the mesh keeps the object's name
+    assert {"skin_morphs", "brows_morphs"} <= names and "skin" in meshes
+    skinned = [n for n in doc["nodes"] if "skin" in n and "mesh" in n]
+    assert all(n["name"] != doc["meshes"][n["mesh"]]["name"] for n in skinned
+               if doc["meshes"][n["mesh"]].get("weights"))
+    static, _ = build_gltf(small_rig, None)
+    assert "skin" in {n["name"] for n in static["nodes"]}  # nothing animated: no split
+    assert "extras" not in static["scenes"][0]
+
+
 def test_bad_extension(tmp_path, small_rig):
     with pytest.raises(Exception, match=r"\.glb or \.gltf"):
         write_gltf(tmp_path / "x.obj", small_rig)

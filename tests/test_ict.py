@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mimika.errors import DataError, ParameterError
-from mimika.face.ict import find_ict_dir
+from mimika.face.heads.ict import find_ict_dir
 
 ICT = os.environ.get("MIMIKA_ICT_DIR")
 needs_ict = pytest.mark.skipif(
@@ -57,7 +57,7 @@ def test_find_ict_dir_accepts_root_or_facexmodel(tmp_path):
 def rig(tmp_path_factory):
     if not ICT or not Path(ICT).exists():
         pytest.skip("MIMIKA_ICT_DIR not set or absent: the ICT Face Model is not available")
-    from mimika.face.blendshape import load_ict_rig
+    from mimika.face.heads.ict import load_ict_rig
 
     return load_ict_rig()
 
@@ -139,7 +139,7 @@ def test_rejects_bad_input(rig):
 @pytest.mark.ict
 @needs_ict
 def test_cache_roundtrip_and_corrupt_cache_rebuilt(tmp_path, monkeypatch):
-    from mimika.face.ict import load_ict_data
+    from mimika.face.heads.ict import load_ict_data
 
     monkeypatch.setenv("MIMIKA_CACHE_DIR", str(tmp_path))
     a = load_ict_data()

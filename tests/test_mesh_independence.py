@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from mimika.face.builtin import build_builtin_head
-from mimika.face.field import load_field_rig
+from mimika.face.heads.builtin import build_builtin_head
+from mimika.face.rigs.field import load_field_rig
 from mimika.facs import SEED_AUS
 
 TOL = 0.02  # cm: 0.2 mm, about 1.5 % of the largest AU displacement (AU27, 1.45 cm)

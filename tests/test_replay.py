@@ -1,17 +1,11 @@
 """Live Link Face / OpenFace import and replay; the CLI commands of mimika.commands.timeline."""
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from conftest import MOTION_DIR as MOTION
+from conftest import needs_motion
 from mimika.io.tracks import read_livelink_csv, read_track
-
-MOTION = os.environ.get("MIMIKA_MOTION_DIR")
-needs_motion = pytest.mark.skipif(
-    not (MOTION and (Path(MOTION) / "S88-001.csv").is_file()),
-    reason="MIMIKA_MOTION_DIR not set (Live Link Face takes, e.g. shared/motion/livelinkface)")
 
 
 @pytest.fixture
@@ -31,7 +25,7 @@ def cli(monkeypatch, capsys):
 
 @needs_motion
 def test_livelink_dropouts_filled_at_30fps():
-    tr = read_livelink_csv(Path(MOTION) / "S88-001.csv")
+    tr = read_livelink_csv(MOTION / "S88-001.csv")
     assert tr.fps == 30.0
     assert tr.meta["dropouts"] == 277 and tr.meta["filled"] >= 277
     assert tr.n_frames == 1942  # 1939 rows + 3 missing rows on the 30 fps grid
@@ -44,7 +38,7 @@ def test_livelink_dropouts_filled_at_30fps():
 
 @needs_motion
 def test_replay_cli_glb_and_csv(tmp_path, cli):
-    take = Path(MOTION) / "apfel.csv"
+    take = MOTION / "apfel.csv"
     code, out, err = cli("replay", take, "-o", tmp_path / "take.csv", "--fps", "10")
     assert code == 0 and "wrote" in out and "drop-out rows filled" in err
     back = read_track(tmp_path / "take.csv")
@@ -102,3 +96,29 @@ def test_cli_errors_are_one_line(tmp_path, cli):
     csv.write_text("time,AU12\n0,0.5\n0.1,x\n")
     code, _, err = cli("replay", csv, "-o", tmp_path / "y.csv")
     assert code == 2 and "t.csv:3:AU12" in err
+
+
+def test_cli_reports_where_the_animation_ends(tmp_path, cli):
+    from mimika.io.tracks import write_track
+    from mimika.tracks import AUTrack
+
+    write_track(AUTrack(np.linspace(0, 1, 121)[:, None], ("AU12",), 25), tmp_path / "t.csv")
+    code, out, _ = cli("replay", tmp_path / "t.csv", "-o", tmp_path / "t.glb")
+    assert code == 0 and "121 frames at 25 fps, 0–4.80 s" in out  # not 4.84 s
+    assert "set 25 fps before importing, frames 0–120" in out
+
+
+def test_cli_replay_options_and_broken_takes(tmp_path, cli):
+    from mimika.io.arkit import LIVELINK_COLUMNS
+
+    zeros = ",".join(["0.1"] * (len(LIVELINK_COLUMNS) - 2))
+    take = tmp_path / "t.csv"
+    take.write_text(",".join(LIVELINK_COLUMNS) + "\n" + "".join(
+        f"00:00:00:{f:02d}.000,61,{zeros}\n" for f in (40, 44, 42, 46)))
+    code, _, err = cli("replay", take, "-o", tmp_path / "x.csv")
+    assert code == 2 and "t.csv:4:Timecode: not after line 3" in err
+    assert len(err.strip().splitlines()) == 1
+    code, _, err = cli("replay", take, "-o", tmp_path / "x.csv", "--timecodes", "repair")
+    assert code == 0 and "timecodes repaired: 2 rows moved" in err
+    code, _, err = cli("replay", take, "-o", tmp_path / "x.csv", "--scale", "1")
+    assert code == 2 and "--scale does not apply to Live Link Face files" in err

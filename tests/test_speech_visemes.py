@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import logging
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -171,7 +172,7 @@ def test_cue_boundaries_are_phoneme_starts(utts):
 def test_rhubarb_json_structure(utts):
     doc = json.loads(json.dumps(rhubarb_json(utts["en"], sound_file="a.wav")))
     assert set(doc) == {"metadata", "mouthCues"}
-    assert doc["metadata"]["soundFile"] == "a.wav"
+    assert doc["metadata"]["soundFile"] == str(Path("a.wav").resolve())  # absolute, as Rhubarb
     cues = doc["mouthCues"]
     assert {c["value"] for c in cues} <= set("ABCDEFGHX")
     assert {"A", "X"} <= {c["value"] for c in cues}

@@ -1,7 +1,7 @@
 """mimika — animate 3D faces with FACS Action Units.
 
 The top-level namespace is light: it loads no OpenGL, torch, espeak or web code.
-Heavy pieces are imported where they are used (``mimika.render``, ``mimika.face.ict``).
+Heavy pieces are imported where they are used (``mimika.render``, ``mimika.face.heads.ict``).
 """
 
 from mimika.errors import DataError, MimikaError, ParameterError

@@ -13,24 +13,25 @@ from mimika.facs import AU_CATALOGUE, base_code, parse_au_values
 Progress = Callable[[int, int], None]
 
 
-def _rig(head: str | Path | Rig, fields: str | Path | None) -> Rig:
+def _rig(head: str | Path | Rig | None, fields: str | Path | None) -> Rig:
     if isinstance(head, Rig):
         return head
-    from mimika.face.heads import load_head
+    from mimika.face.heads import DEFAULT_HEAD, load_head
 
-    return load_head(head, fields=fields)[1]
+    return load_head(DEFAULT_HEAD if head is None else head, fields=fields)[1]
 
 
 def render_pose(
     aus: Mapping[str, float] | list[str],
     *,
-    head: str | Path | Rig = "builtin",
+    head: str | Path | Rig | None = None,
     view: str = "front",
     size: tuple[int, int] = (640, 480),
     fields: str | Path | None = None,
     samples: int = 4,
 ) -> np.ndarray:
-    """Render ``aus`` (``{"AU12": 1}`` or ``["AU12=1"]``) on ``head``; returns (H, W, 3) uint8."""
+    """Render ``aus`` (``{"AU12": 1}`` or ``["AU12=1"]``) on ``head`` (default: the default
+    character); returns (H, W, 3) uint8."""
     from mimika.render import Renderer
 
     rig = _rig(head, fields)
@@ -41,7 +42,7 @@ def render_pose(
 
 def au_sheet(
     *,
-    head: str | Path | Rig = "builtin",
+    head: str | Path | Rig | None = None,
     view: str = "front",
     tile: tuple[int, int] = (256, 256),
     columns: int = 8,

@@ -260,7 +260,7 @@ def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
             out.append(h)
             continue
         if h == "ict":
-            from mimika.face.ict import find_ict_dir
+            from mimika.face.heads.ict import find_ict_dir
 
             try:
                 find_ict_dir()

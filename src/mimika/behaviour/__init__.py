@@ -1,5 +1,6 @@
-"""Behaviour generators: blinks, gaze, head motion, brow raises, smiles, idle motion and the
-knowledge base's text defaults, each a toggleable layer → an :class:`~mimika.tracks.AUTrack`.
+"""Behaviour generators: blinks, gaze, head motion, brow raises, smiles, idle motion, whole-body
+idle (``body.*`` channels) and the knowledge base's text defaults, each a toggleable layer → an
+:class:`~mimika.tracks.AUTrack`.
 
 Every layer is a function ``layer(cues, *, fps, rng, params) -> AUTrack`` over the duration of
 a :class:`SpeechCues`; parameters live in ``behaviour/data/behaviour.json``. Each layer draws
@@ -22,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from mimika.behaviour.blink import blink_layer
+from mimika.behaviour.body import body_layer
 from mimika.behaviour.brows import brow_layer
 from mimika.behaviour.cues import SpeechCues, cues_from_utterance
 from mimika.behaviour.gaze import gaze_layer
@@ -40,6 +42,7 @@ Layer = Callable[..., AUTrack]
 LAYERS: dict[str, Layer] = {
     "head": head_layer,
     "idle": idle_layer,
+    "body": body_layer,
     "gaze": gaze_layer,
     "blink": blink_layer,
     "brows": brow_layer,

@@ -52,3 +52,15 @@ def progress_bar(quiet: bool, label: str) -> Callable[[int, int], None] | None:
         sys.stderr.flush()
 
     return report
+
+
+HEAD_HELP = ("a character preset (default: {default}; see 'mimika characters'), a character "
+             "file (.yaml), builtin, ict, an ICT-FaceKit folder or an .obj face mesh")
+
+
+def add_head_arg(parser: argparse.ArgumentParser) -> None:
+    """``--head``: which head to animate (default: the default character)."""
+    from mimika.face.heads import DEFAULT_HEAD
+
+    parser.add_argument("--head", default=DEFAULT_HEAD,
+                        help=HEAD_HELP.format(default=DEFAULT_HEAD))

@@ -40,8 +40,14 @@ def _identity(args: argparse.Namespace):
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    from mimika.face.field import parse_fields
-    from mimika.face.fit import FitOptions, fit_ict, report_csv, report_markdown, transfer_fields
+    from mimika.face.fitting import (
+        FitOptions,
+        fit_ict,
+        report_csv,
+        report_markdown,
+        transfer_fields,
+    )
+    from mimika.face.rigs.field import parse_fields
 
     shapes = Path(args.shapes)
     if not shapes.is_dir():
@@ -78,8 +84,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
 
 def cmd_transfer(args: argparse.Namespace) -> int:
-    from mimika.face.field import parse_fields
-    from mimika.face.fit import read_fields_json, transfer_fields
+    from mimika.face.fitting import read_fields_json, transfer_fields
+    from mimika.face.rigs.field import parse_fields
 
     doc = transfer_fields(read_fields_json(args.fields), _target_head(args.to, _identity(args)))
     parse_fields(doc, source=args.output)

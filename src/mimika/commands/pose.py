@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from mimika.commands._util import progress_bar, size_arg
+from mimika.commands._util import add_head_arg, progress_bar, size_arg
 from mimika.errors import ParameterError
 
 VIEWS = ("front", "three-quarter", "profile")
@@ -60,8 +60,7 @@ def register(sub) -> None:
                    help="a named expression from the library (see 'mimika expressions')")
     q.add_argument("--intensity", type=float, default=1.0,
                    help="scale of the --expression's AUs, in [0, 1] (default 1)")
-    q.add_argument("--head", default="builtin",
-                   help="builtin (default), ict, an ICT-FaceKit folder or an .obj face mesh")
+    add_head_arg(q)
     q.add_argument("--fields", help="AU field parameters (JSON) for a FieldRig head")
     q.add_argument("--identity", type=int, metavar="K",
                    help="ICT head only: identity mode K (0–9) of the ICT model")

@@ -8,7 +8,7 @@ from pathlib import Path
 from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
 
-VISEME_FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead")
+VISEME_FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead", "ovr")
 
 
 def _check_suffix(path: str | None, suffixes: tuple[str, ...], what: str) -> None:
@@ -28,7 +28,7 @@ def _write_outputs(args: argparse.Namespace, utt, *, sound_file: str) -> list[st
         done.append(f"{args.aus} ({track.n_frames} frames × {len(track.channels)} AUs "
                     f"at {args.fps:g} fps)")
     if args.visemes:
-        write_visemes(args.visemes, utt, format=args.format, sound_file=sound_file)
+        write_visemes(args.visemes, utt, format=args.format, sound_file=sound_file, fps=args.fps)
         done.append(f"{args.visemes} ({args.format} visemes)")
     return done
 
@@ -39,7 +39,7 @@ def cmd_say(args: argparse.Namespace) -> int:
 
     _check_suffix(args.output, (".wav",), "output")
     _check_suffix(args.aus, (".csv",), "--aus")
-    _check_suffix(args.visemes, (".json",), "--visemes")
+    _check_suffix(args.visemes, (".json", ".csv"), "--visemes")
     if not (args.output or args.aus or args.visemes or args.timing):
         raise ParameterError("nothing to write; give -o FILE.wav, --aus, --visemes or --timing")
     text = args.text
@@ -74,7 +74,7 @@ def cmd_align(args: argparse.Namespace) -> int:
 
     _check_suffix(args.output, (".json",), "output")
     _check_suffix(args.aus, (".csv",), "--aus")
-    _check_suffix(args.visemes, (".json",), "--visemes")
+    _check_suffix(args.visemes, (".json", ".csv"), "--visemes")
     if (args.transcript is None) == (args.transcript_file is None):
         raise ParameterError("give exactly one of --transcript TEXT or --transcript-file FILE")
     text = args.transcript
@@ -127,10 +127,13 @@ def _fps(text: str) -> float:
 def _outputs(q: argparse.ArgumentParser) -> None:
     q.add_argument("--aus", metavar="FILE.csv",
                    help="mouth AU track as CSV (time,AU10,…; time in seconds)")
-    q.add_argument("--visemes", metavar="FILE.json", help="viseme cues as JSON (see --format)")
+    q.add_argument("--visemes", metavar="FILE.json",
+                   help="viseme cues as JSON (see --format); FILE.csv: per-frame Oculus "
+                        "viseme weights at --fps")
     q.add_argument("--format", default="oculus", choices=VISEME_FORMATS,
                    help="viseme set for --visemes (default oculus)")
-    q.add_argument("--fps", type=_fps, default=25.0, help="frame rate of --aus (default 25)")
+    q.add_argument("--fps", type=_fps, default=25.0,
+                   help="frame rate of --aus and of per-frame visemes (ovr, .csv; default 25)")
     q.add_argument("--voice", help="espeak voice variant (f3, m2 …) or voice name")
     q.add_argument("-q", "--quiet", action="store_true")
 

@@ -7,10 +7,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import limit_options, size_arg
+from mimika.commands._util import add_head_arg, limit_options, size_arg
 from mimika.errors import ParameterError
 
 CSV_FORMATS = ("au", "openface", "arkit")
+INPUT_FORMATS = (*CSV_FORMATS, "pyfeat")
+#: reader keyword → (argparse dest, flag) of the replay options that set it
+READER_FLAGS = {"fill": ("fill", "--fill"), "source": ("source", "--from"),
+                "fps": ("take_fps", "--take-fps"), "scale": ("scale", "--scale"),
+                "timecodes": ("timecodes", "--timecodes"), "max_gap": ("max_gap", "--max-gap")}
 OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml")
 #: most tiles in a .png contact strip
 MAX_SHEET = 400
@@ -61,11 +66,15 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
     if args.format and ext != ".csv":
         raise ParameterError("--format applies to .csv outputs only")
     if ext == ".csv":
+        from mimika.io.livelink import livelink_rate
         from mimika.io.tracks import write_track
 
-        write_track(track, out, format=args.format or "au")
-        _say(args, f"wrote {out} ({args.format or 'au'} CSV, {track.n_frames} frames at "
-                   f"{track.fps:g} fps, {len(track.channels)} AUs)")
+        fmt = args.format or "au"
+        write_track(track, out, format=fmt)
+        fps = livelink_rate(track.fps) if fmt == "arkit" else track.fps
+        n = track.n_frames if fps == track.fps else round(track.n_frames * fps / track.fps)
+        _say(args, f"wrote {out} ({fmt} CSV, {n} frames at {fps:g} fps, "
+                   f"{len(track.channels)} AUs)")
         return
     if ext in (".xml", ".json"):
         if timeline is None:
@@ -91,8 +100,10 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
         from mimika.io.gltf import write_gltf
 
         write_gltf(out, rig, track)
-        _say(args, f"wrote {out} ({track.n_frames} frames, {track.duration:.2f} s, "
-                   f"{len(track.channels)} animated AUs)")
+        last = max(track.n_frames - 1, 1)
+        _say(args, f"wrote {out} ({track.n_frames} frames at {track.fps:g} fps, 0–"
+                   f"{last / track.fps:.2f} s, {len(track.channels)} animated AUs; in Blender "
+                   f"set {track.fps:g} fps before importing, frames 0–{last})")
         return
     from mimika.render import Renderer, contact_sheet, save_png
 
@@ -124,16 +135,31 @@ def cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _reader_options(args, fmt: str) -> dict:
+    """The replay options given on the command line, checked against the take's format."""
+    from mimika.io.tracks import FORMAT_NAMES, READ_OPTIONS
+
+    given = {k: getattr(args, dest) for k, (dest, _) in READER_FLAGS.items()
+             if getattr(args, dest, None) is not None}
+    wrong = [READER_FLAGS[k][1] for k in given if k not in READ_OPTIONS[fmt]]
+    if wrong:
+        raise ParameterError(f"{', '.join(wrong)} does not apply to {FORMAT_NAMES[fmt]} "
+                             f"files ({args.take})")
+    return given
+
+
 def cmd_replay(args: argparse.Namespace) -> int:
-    from mimika.io.tracks import read_track
+    from mimika.io.tracks import detect_format, read_track
     from mimika.limits import check_frames
 
-    kw = {"fill": args.fill} if args.fill else {}
-    track = read_track(args.take, format=args.input_format, **kw)
+    fmt = args.input_format or detect_format(args.take)
+    track = read_track(args.take, format=fmt, **_reader_options(args, fmt))
     check_frames(track.n_frames, f"take {args.take}")
     if args.fps:
         track = track.resample(fps=args.fps)
     meta = track.meta
+    for note in meta.get("notes", []):
+        print(f"mimika: note: {note}", file=sys.stderr)
     if meta.get("dropouts"):
         print(f"mimika: note: {args.take}: {meta['dropouts']} drop-out rows filled "
               f"({meta.get('fill', 'linear')})", file=sys.stderr)
@@ -201,7 +227,7 @@ def _common(p, *, head: bool = True) -> None:
                    help="CSV layout: au (time,AU01,…; default), openface, arkit (Live Link Face)")
     p.add_argument("--fps", type=float, help="frames per second (default: project or 25)")
     if head:
-        p.add_argument("--head", default="builtin", help="builtin (default), ict, a folder or .obj")
+        add_head_arg(p)
     p.add_argument("--view", default="front", choices=("front", "three-quarter", "profile"),
                    help="camera for .png")
     p.add_argument("--size", type=size_arg, default=(320, 240), help="tile size for .png")
@@ -236,13 +262,28 @@ def register(sub) -> None:
     r.add_argument("-v", "--verbose", action="store_true", help="also show suggestions")
     r.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("replay", help="replay a recorded take (Live Link Face / OpenFace / AU "
-                       "CSV) on a head → glTF, CSV or PNG")
+    p = sub.add_parser("replay", help="replay a recorded take (Live Link Face / OpenFace / "
+                       "py-feat / AU CSV) on a head → glTF, CSV or PNG")
     p.add_argument("take", help="the CSV take")
     _common(p)
-    p.add_argument("--input-format", choices=CSV_FORMATS, help="override header detection")
-    p.add_argument("--fill", choices=("linear", "nearest", "hold"),
+    p.add_argument("--input-format", choices=INPUT_FORMATS, help="override header detection")
+    p.add_argument("--fill", choices=("linear", "nearest", "hold", "quadratic", "cubic"),
                    help="how drop-outs are filled (default linear)")
+    p.add_argument("--from", dest="source", choices=("blendshapes", "aus"),
+                   help="py-feat: drive the face from its blendshapes (default) or its AU "
+                        "probabilities")
+    p.add_argument("--take-fps", type=float, metavar="FPS",
+                   help="frame rate of the recording when the file does not tell it (py-feat "
+                        "video, OpenFace image sequences)")
+    p.add_argument("--scale", choices=("auto", "5", "1"),
+                   help="OpenFace AUxx_r scale: 5 (OpenFace), 1 (already 0–1, e.g. FACSvatar), "
+                        "auto (default: 5 if any value exceeds 1 or all have OpenFace's 2 "
+                        "decimals)")
+    p.add_argument("--timecodes", choices=("strict", "repair"),
+                   help="Live Link: refuse (default) or repair rows out of order, duplicates "
+                        "and long gaps")
+    p.add_argument("--max-gap", type=float, metavar="SECONDS",
+                   help="Live Link: the longest gap between rows (default 2 s)")
     p.set_defaults(func=cmd_replay)
 
     q = sub.add_parser("plot", help="AU curves of a script, project or CSV take as a PNG")

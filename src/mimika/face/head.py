@@ -11,8 +11,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-#: Object categories of seed 002 Table 4.2: which AUs may move an object.
-CATEGORIES = ("face", "eyes", "teeth")
+#: Object categories of seed 002 Table 4.2: which AUs may move an object; ``body`` (clothes,
+#: torso) is moved only by a skeleton, never by face AUs.
+CATEGORIES = ("face", "eyes", "teeth", "body")
 
 
 def frozen_array(a, dtype) -> np.ndarray:
@@ -22,15 +23,40 @@ def frozen_array(a, dtype) -> np.ndarray:
     return out
 
 
+#: how a part's texture alpha is used: ignored, cut out at 0.5, or blended (hair, lashes)
+ALPHA_MODES = ("opaque", "mask", "blend")
+
+
+@dataclass(frozen=True, eq=False)
+class Texture:
+    """An image painted on a part at its object's UVs: (H, W, 3 or 4) uint8, sRGB colour; row 0
+    is the top of the image (v = 1). For skin materials the alpha channel is a gloss map
+    (specular scale, 255 = the material's own); for others it is opacity."""
+
+    image: np.ndarray
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        img = np.asarray(self.image)
+        if img.dtype != np.uint8 or img.ndim != 3 or img.shape[2] not in (3, 4):
+            raise ValueError(f"texture {self.name!r}: need (H, W, 3|4) uint8, got "
+                             f"{img.shape} {img.dtype}")
+        object.__setattr__(self, "image", frozen_array(img, np.uint8))
+
+
 @dataclass(frozen=True)
 class Part:
-    """Triangles of one object drawn with one material."""
+    """Triangles of one object drawn with one material (and optionally a texture)."""
 
     material: str  #: key into render/data/materials.json (skin, lips, sclera, iris, pupil, …)
     faces: np.ndarray  #: shape (F, 3), int32 indices into the object's vertices
+    texture: Texture | None = None  #: base colour (and alpha); needs the object's UVs
+    alpha_mode: str = "opaque"  #: one of :data:`ALPHA_MODES`
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "faces", frozen_array(self.faces, np.int32).reshape(-1, 3))
+        if self.alpha_mode not in ALPHA_MODES:
+            raise ValueError(f"alpha_mode {self.alpha_mode!r} must be one of {ALPHA_MODES}")
 
 
 @dataclass(frozen=True)
@@ -43,6 +69,12 @@ class MeshObject:
     parts: tuple[Part, ...]
     pivot: np.ndarray | None = None  #: rotation centre (eyeball centre for eyes), shape (3,)
     uvs: np.ndarray | None = None  #: shape (N, 2) texture coordinates, optional
+    #: (N,) for meshes split at UV seams: the index of the position each vertex was split
+    #: from (vertices sharing it get one smooth normal); None when not split
+    weld: np.ndarray | None = None
+    #: faces are known to wind counter-clockwise seen from outside (the renderer then does
+    #: not guess the orientation from the object's centre, which fails for open shapes)
+    oriented: bool = False
 
     def __post_init__(self) -> None:
         if self.category not in CATEGORIES:
@@ -52,6 +84,8 @@ class MeshObject:
             object.__setattr__(self, "pivot", frozen_array(self.pivot, np.float32))
         if self.uvs is not None:
             object.__setattr__(self, "uvs", frozen_array(self.uvs, np.float32))
+        if self.weld is not None:
+            object.__setattr__(self, "weld", frozen_array(self.weld, np.int64))
 
     @property
     def n_vertices(self) -> int:

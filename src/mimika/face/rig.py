@@ -9,7 +9,7 @@ import numpy as np
 
 from mimika.errors import ParameterError
 from mimika.face.head import Head
-from mimika.facs import AU_CATALOGUE, base_code, parse_au
+from mimika.facs import AU_CATALOGUE, base_code, is_body, parse_au
 from mimika.tracks import AUTrack
 
 Positions = dict[str, np.ndarray]
@@ -36,6 +36,9 @@ class Rig(ABC):
         for code, val in aus.items():
             c = parse_au(code)
             if c not in sup:
+                if is_body(c):
+                    raise ParameterError(f"{c} moves the body; the {self.head.name!r} head "
+                                         "has none (characters do: run 'mimika characters')")
                 name = AU_CATALOGUE[base_code(c)].name
                 raise ParameterError(
                     f"{c} ({name}) is not modelled by the {self.head.name!r} head; "
@@ -49,6 +52,7 @@ class Rig(ABC):
 
     @property
     def supported_bilateral(self) -> tuple[str, ...]:
+        """The supported AUs without their L/R variants (and without body channels)."""
         return tuple(c for c in self.supported if len(c) == 4)
 
     def deform_track(self, track: AUTrack) -> Iterator[Positions]:

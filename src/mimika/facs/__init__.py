@@ -2,9 +2,11 @@
 
 from mimika.facs.catalogue import (
     AU_CATALOGUE,
+    BODY_CHANNELS,
     SEED_AUS,
     ActionUnit,
     base_code,
+    is_body,
     parse_au,
     parse_au_values,
     side_of,
@@ -12,9 +14,11 @@ from mimika.facs.catalogue import (
 
 __all__ = [
     "AU_CATALOGUE",
+    "BODY_CHANNELS",
     "SEED_AUS",
     "ActionUnit",
     "base_code",
+    "is_body",
     "parse_au",
     "parse_au_values",
     "side_of",

@@ -2,6 +2,10 @@
 
 Canonical names: ``AU01`` … ``AU66`` for bilateral AUs, ``AU12L`` / ``AU12R`` for one side
 (the subject's left/right). Input accepts ``1``, ``AU1``, ``au12``, ``12L``, ``AU12r``.
+
+Besides the AUs, a few *body channels* (``body.breath``, ``body.shrug_l`` …, listed in
+``facs/data/body.csv``) name whole-body motion FACS does not code; they travel in the same
+tracks, the AU Blender passes them through and only heads with a skinned body move them.
 """
 
 from __future__ import annotations
@@ -63,6 +67,20 @@ def _load() -> dict[str, ActionUnit]:
 
 #: Every FACS AU (face 1–46, head 51–58, eyes 61–66), keyed by canonical code.
 AU_CATALOGUE: dict[str, ActionUnit] = _load()
+
+
+def _load_body() -> dict[str, str]:
+    text = resources.files("mimika.facs").joinpath("data/body.csv").read_text("utf-8")
+    return {r["code"]: r["name"] for r in csv.DictReader(text.splitlines())}
+
+
+#: Body channels (code → name): whole-body motion in [0, 1] beyond FACS.
+BODY_CHANNELS: dict[str, str] = _load_body()
+
+
+def is_body(code: str) -> bool:
+    """True for a body channel (``body.breath`` …), False for an AU code."""
+    return code in BODY_CHANNELS
 #: The 32 AUs seed 002 models (Table 4.1).
 SEED_AUS: tuple[str, ...] = tuple(c for c, a in AU_CATALOGUE.items() if a.seed)
 
@@ -82,6 +100,8 @@ def parse_au(text: str | int) -> str:
     Raises :class:`ParameterError` naming the closest valid codes when ``text`` is unknown.
     """
     raw = str(text)
+    if raw.strip().lower() in BODY_CHANNELS:
+        return raw.strip().lower()
     m = _CODE_RE.match(raw)
     if m:
         code = f"AU{int(m.group(1)):02d}"
@@ -105,13 +125,13 @@ def parse_au(text: str | int) -> str:
 
 
 def base_code(code: str) -> str:
-    """``AU12L`` → ``AU12``; ``AU12`` → ``AU12``."""
-    return code[:4]
+    """``AU12L`` → ``AU12``; ``AU12`` → ``AU12``; body channels are their own base."""
+    return code if code in BODY_CHANNELS else code[:4]
 
 
 def side_of(code: str) -> str | None:
-    """``AU12L`` → ``"L"``, ``AU12R`` → ``"R"``, ``AU12`` → ``None``."""
-    return code[4:] or None
+    """``AU12L`` → ``"L"``, ``AU12R`` → ``"R"``, ``AU12`` → ``None`` (body channels too)."""
+    return None if code in BODY_CHANNELS else code[4:] or None
 
 
 def parse_intensity(value: str | float, *, what: str = "intensity") -> float:

@@ -19,7 +19,13 @@ Layout of the exported scene (units: the head's centimetres scaled to metres)::
   weight (1 above the chin, smoothstep to 0 at the neck base) and the neck joint with the rest —
   the linear-blend version of the rig's bending neck;
 * **animation** ``mimika``: morph weights and joint / eye rotations sampled from an
-  :class:`~mimika.tracks.AUTrack` (LINEAR; quaternions normalised).
+  :class:`~mimika.tracks.AUTrack` (LINEAR; quaternions normalised); the scene's and the
+  animation's ``extras`` carry ``fps``, ``frame_start`` (0), ``frame_end`` and ``duration_s``
+  (glTF keeps seconds only; Blender's importer needs the frame rate set before import);
+* **naming for Blender**: Blender's importer turns an animated skinned node into an empty
+  (named like the node) plus a mesh object (named like the mesh); such nodes are therefore
+  called ``<object>_morphs`` and their meshes ``<object>``, so the mesh objects keep the
+  head's object names.
 
 Written with numpy + json (no extra dependency); checked by the Khronos glTF-Validator in the
 tests. ``.glb`` is binary; ``.gltf`` embeds its buffer as a base64 data URI.
@@ -48,7 +54,7 @@ from mimika.tracks import AUTrack
 
 log = logging.getLogger(__name__)
 
-__all__ = ["build_gltf", "rig_motion", "write_gltf"]
+__all__ = ["build_gltf", "rig_motion", "timing_extras", "write_gltf"]
 
 _FLOAT, _UINT, _USHORT = 5126, 5125, 5123
 _ARRAY, _ELEMENTS = 34962, 34963
@@ -166,6 +172,14 @@ class _Builder:
         self.accessors.append(acc)
         return len(self.accessors) - 1
 
+    def add_bytes(self, data: bytes) -> int:
+        """A buffer view holding ``data`` (an image); returns its index."""
+        while len(self.bin) % 4:
+            self.bin.append(0)
+        self.views.append({"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data)})
+        self.bin += data
+        return len(self.views) - 1
+
 
 _DELTAS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -194,6 +208,10 @@ def _morph_deltas(rig: Rig, codes: tuple[str, ...]) -> dict[str, list[tuple[str,
 def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = None
                ) -> tuple[dict, bytes]:
     """The glTF JSON document and its binary buffer for ``rig``'s head (+ ``track``)."""
+    if getattr(rig, "skinning", None) is not None:  # a character with a skeleton
+        from mimika.io.gltf_skinned import build_skinned_gltf
+
+        return build_skinned_gltf(rig, track, name=name)
     head: Head = rig.head
     b = _Builder()
     mats_src = _materials()
@@ -295,6 +313,11 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
             morph_nodes.append((ni, names))
     if not nodes[1]["children"]:
         del nodes[1]["children"]
+    animated = track is not None and track.n_frames > 0
+    if animated:  # Blender names the empty it leaves after the node, the mesh after the mesh
+        for ni, _ in morph_nodes:
+            if "skin" in nodes[ni]:
+                nodes[ni]["name"] = f"{nodes[ni]['name']}_morphs"
 
     doc: dict[str, Any] = {
         "asset": {"version": "2.0", "generator": f"mimika {mimika.__version__}"},
@@ -303,14 +326,25 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
         "nodes": nodes, "meshes": meshes, "materials": materials, "skins": [skin],
         "extras": {"units": "metres (head modelled in cm)", "aus": sup},
     }
-    if track is not None and track.n_frames:
+    if animated:
+        timing = timing_extras(track)
+        doc["scenes"][0]["extras"] = timing
         doc["animations"] = [_animation(b, track, morph_nodes, eye_nodes, motion, head_t0)]
+        doc["animations"][0]["extras"] = dict(timing)
     doc["accessors"] = b.accessors
     doc["bufferViews"] = b.views
     while len(b.bin) % 4:
         b.bin.append(0)
     doc["buffers"] = [{"byteLength": len(b.bin)}]
     return doc, bytes(b.bin)
+
+
+def timing_extras(track: AUTrack) -> dict[str, float | int]:
+    """Frame rate and range of ``track`` as the glTF ``extras`` mimika writes: keys run from
+    frame 0 to ``n_frames - 1`` (the animation ends at ``(n_frames - 1) / fps`` s)."""
+    last = max(track.n_frames - 1, 1)
+    return {"fps": float(track.fps), "frame_start": 0, "frame_end": last,
+            "duration_s": round(last / track.fps, 6)}
 
 
 def _animation(b: _Builder, track: AUTrack, morph_nodes, eye_nodes, motion, head_t0) -> dict:

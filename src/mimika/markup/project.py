@@ -49,7 +49,8 @@ MIGRATIONS: dict[int, Callable[[dict], dict]] = {}
 #: the oldest version this mimika can still read (through MIGRATIONS)
 OLDEST = 1
 
-DEFAULT_SETTINGS: dict[str, Any] = {"head": "builtin", "fps": 25.0, "view": "front",
+#: "head": the default character (mimika.face.heads.DEFAULT_HEAD; markup does not import face)
+DEFAULT_SETTINGS: dict[str, Any] = {"head": "amara", "fps": 25.0, "view": "front",
                                     "lang": "en", "blend": False, "size": [640, 480]}
 _VIEWS = ("front", "three-quarter", "profile")
 _LANGS = ("en", "de", "pl")
@@ -300,7 +301,7 @@ def _settings(c: _Check, d: Any) -> dict[str, Any]:
     out = dict(DEFAULT_SETTINGS)
     out.update(d)
     if not isinstance(out["head"], str) or not out["head"]:
-        c.add("settings.head", "must be a head name or path (builtin, ict, …)")
+        c.add("settings.head", "must be a head name or path (a character, builtin, ict, …)")
     fps = out["fps"]
     if not isinstance(fps, _NUM) or isinstance(fps, bool) or not (0 < fps <= 1000):
         c.add("settings.fps", f"must be a number in (0, 1000], got {json.dumps(fps)}")

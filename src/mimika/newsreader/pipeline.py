@@ -20,16 +20,25 @@ from mimika.tracks import AUTrack, valid_fps
 
 log = logging.getLogger(__name__)
 
-#: every feature of the newsreader; "skin" is the skin shader, the rest are behaviour layers
-FEATURES = ("head", "gaze", "blink", "idle", "brows", "smile", "knowledge", "skin")
-#: the seed's ablation set: each of these switched off once (plus the all-features video)
-ABLATIONS = ("head", "gaze", "blink", "idle", "skin", "brows", "smile")
+#: every feature of the newsreader; "skin" is the skin shader, "hair" draws the hair, the rest
+#: are behaviour layers ("body": whole-body idle, for heads with a body)
+FEATURES = ("head", "gaze", "blink", "idle", "body", "brows", "smile", "knowledge", "skin",
+            "hair")
+#: not behaviour layers: how the head is drawn
+_DRAWING = ("skin", "hair")
+#: the seed's ablation set (seed 004's seven: head motion, gaze, hair, blink, whole-body idle,
+#: skin, brows; plus idle sway and smile): each switched off once, plus the all-features video
+ABLATIONS = ("head", "gaze", "hair", "blink", "body", "skin", "brows", "idle", "smile")
 #: CLI / file names of the features
 FLAG_NAMES = {"head": "head-motion", "gaze": "gaze", "blink": "blink", "idle": "idle",
-              "brows": "brows", "smile": "smile", "knowledge": "knowledge",
-              "skin": "skin-shader"}
-#: how much of the image height the face (hairline to chin) fills
+              "body": "body-idle", "brows": "brows", "smile": "smile",
+              "knowledge": "knowledge", "skin": "skin-shader", "hair": "hair"}
+#: how much of the image height the face (hairline to chin) fills: a close-up of a bare head;
+#: heads with a body get a TV head-and-shoulders shot (face ``BUST_FILL`` of the height, eyes
+#: ``EYE_LINE`` of the height from the top)
 FILL = 0.62
+BUST_FILL = 0.34
+EYE_LINE = 0.37
 
 Progress = Callable[[int, int], None]
 
@@ -142,7 +151,7 @@ def news_track(article: Article | str, *, lang: str = "en", fps: float = 25.0,
     mouth = mouth_track(utterance, fps=fps)
     n = mouth.n_frames
     beh = behaviour_layers(cues, fps=fps, seed=seed, params=params,
-                           layers=[x for x in enabled if x != "skin"])
+                           layers=[x for x in enabled if x not in _DRAWING])
     parts = dict(beh)
     script = _retime_script(art, utterance, fps=fps, n_frames=n)
     if script is not None and script.channels:
@@ -182,16 +191,26 @@ def _check_output(out: Path) -> None:
                         "output path with -o") from None
 
 
+def news_camera(head: Any, view: str, aspect: float) -> Any:
+    """The newsreader's camera: a head-and-shoulders shot for heads with a body, else a
+    close-up of the face."""
+    from mimika.render.camera import frame_head
+
+    if any(o.category == "body" for o in head.objects):
+        return frame_head(head, view, aspect=aspect, fill=BUST_FILL, eye_line=EYE_LINE)
+    return frame_head(head, view, aspect=aspect, fill=FILL)
+
+
 def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str = "front",
-                  samples: int = 0, skin_shader: bool = True, chunk: int = 50,
-                  workers: int | None = 1, timings: dict[str, float] | None = None):
+                  samples: int = 0, skin_shader: bool = True, hair: bool = True,
+                  chunk: int = 50, workers: int | None = 1,
+                  timings: dict[str, float] | None = None):
     """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head.
 
     Frames are deformed and drawn in chunks of ``chunk`` by ``workers`` processes
     (:mod:`mimika.render.parallel`; None: one per core for long tracks). The images do not
-    depend on ``workers``.
+    depend on ``workers``. ``hair=False`` leaves the hair out.
     """
-    from mimika.render.camera import frame_head
     from mimika.render.parallel import default_workers, render_track
     from mimika.render.skin import NEWS_LIGHTING, SkinParams
 
@@ -199,12 +218,14 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
     w, h = size
     if workers is None:
         workers = default_workers(track.n_frames, chunk)
-    cam = frame_head(rig.head, view, aspect=w / h, fill=FILL)
+    cam = news_camera(rig.head, view, w / h)
     # video: the blurred skin irradiance is refreshed every third frame (see SkinParams)
     skin = SkinParams(refresh=3) if skin_shader else False
     frames = render_track(rig, track.values, track.channels, camera=cam, size=size,
                           samples=samples, skin=skin, lighting=NEWS_LIGHTING, chunk=chunk,
-                          workers=workers)
+                          workers=workers,
+                          hidden=() if hair else [o.name for o in rig.head.objects
+                                                  if o.name == "hair"])
     tm["workers"] = workers
     while True:  # the time spent waiting for frames
         t0 = time.perf_counter()
@@ -216,7 +237,7 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
 
 
 def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en",
-                head: str = "builtin", layers: Iterable[str] | None = None,
+                head: str | None = None, layers: Iterable[str] | None = None,
                 progress: Progress | None = None, fps: float = 25.0,
                 size: tuple[int, int] = (640, 480), view: str = "front",
                 voice: str | None = None, rate: int = 165, samples: int = 0,
@@ -246,10 +267,10 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     tm: dict[str, float] = {}
     t_all = time.perf_counter()
     if rig is None:
-        from mimika.face.heads import load_head
+        from mimika.face.heads import DEFAULT_HEAD, load_head
 
         t0 = time.perf_counter()
-        _, rig = load_head(head)
+        _, rig = load_head(head or DEFAULT_HEAD)
         tm["load_head"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     if news is None:
@@ -273,7 +294,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     audio = np.zeros(round(n / fps * utt.sr), np.float32)
     audio[: min(len(audio), len(utt.audio))] = utt.audio[: len(audio)]
     frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
-                           skin_shader="skin" in enabled, workers=workers, timings=tm)
+                           skin_shader="skin" in enabled, hair="hair" in enabled,
+                           workers=workers, timings=tm)
     # closing: an interrupted render stops its worker processes at once
     with VideoWriter(out, fps=fps, size=(w, h), audio=audio, sr=utt.sr, crf=crf,
                      preset=preset) as vw, contextlib.closing(frames):
@@ -307,11 +329,11 @@ def render_ablations(text: str | Article, *, out_dir: str | os.PathLike, stem: s
                      **kwargs: Any) -> list[NewsResult]:
     """The seed 004 ablation set: all features, then each of :data:`ABLATIONS` switched off,
     as ``{stem}_all.mp4`` and ``{stem}_no-{feature}.mp4`` in ``out_dir`` (one synthesis)."""
-    from mimika.face.heads import load_head
+    from mimika.face.heads import DEFAULT_HEAD, load_head
 
     d = Path(out_dir)
     kwargs.pop("layers", None)
-    _, rig = load_head(kwargs.pop("head", "builtin"))
+    _, rig = load_head(kwargs.pop("head", None) or DEFAULT_HEAD)
     art = parse_article(text) if isinstance(text, str) else text
     lang = kwargs.get("lang", "en")
     utt, paras = speak_article(art, lang=lang, voice=kwargs.get("voice"),

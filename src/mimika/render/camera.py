@@ -118,9 +118,12 @@ def frame_head(
     aspect: float = 4.0 / 3.0,
     fov_y: float = FOV_Y,
     fill: float = 0.75,
+    eye_line: float | None = None,
 ) -> Camera:
     """A camera on ``view`` whose image the face (hairline to chin) fills by ``fill`` in height.
 
+    ``eye_line`` puts the eyes that fraction of the image height from the top (a TV
+    head-and-shoulders shot: ``fill`` ≈ 0.3, ``eye_line`` ≈ 0.36); default: the face centred.
     The framing comes from the rest-pose landmarks, so it stays put while a face animates.
     """
     angle = math.radians(VIEW_ANGLES[check_view(view)])
@@ -128,6 +131,12 @@ def frame_head(
         raise ParameterError(f"fill={fill} must be in [0.05, 1]")
     centre, height, width = face_frame(head)
     visible_h = max(height / fill, width / (0.85 * aspect))
+    if eye_line is not None:
+        if not 0.05 <= eye_line <= 0.95:
+            raise ParameterError(f"eye_line={eye_line} must be in [0.05, 0.95]")
+        eyes_y = float(np.asarray(head.landmark_points(), np.float64)[36:48, 1].mean())
+        centre = centre.copy()
+        centre[1] = eyes_y - (0.5 - eye_line) * visible_h
     dist = visible_h / 2.0 / math.tan(math.radians(fov_y) / 2.0)
     eye = centre + dist * np.array([math.sin(angle), 0.0, math.cos(angle)])
     reach = 1.5 * visible_h  # generous: the back of the head in profile

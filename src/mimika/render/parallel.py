@@ -34,10 +34,12 @@ def default_workers(n_frames: int, chunk: int) -> int:
     return max(1, min(os.cpu_count() or 1, 4))
 
 
-def _open(rig: Any, size: tuple[int, int], samples: int, skin: Any, lighting: Any) -> Any:
+def _open(rig: Any, size: tuple[int, int], samples: int, skin: Any, lighting: Any,
+          hidden: Sequence[str] = ()) -> Any:
     from mimika.render import Renderer
 
-    return Renderer(rig.head, size=size, samples=samples, skin_shader=skin, lighting=lighting)
+    return Renderer(rig.head, size=size, samples=samples, skin_shader=skin, lighting=lighting,
+                    hidden=hidden)
 
 
 def _draw(renderer: Any, rig: Any, values: np.ndarray, channels: Sequence[str],
@@ -56,12 +58,13 @@ def _watch_parent(ppid: int) -> None:
 
 
 def _init(rig: Any, channels: Sequence[str], size: tuple[int, int], samples: int, skin: Any,
-          lighting: Any, lp_threads: int, ppid: int) -> None:
-    threading.Thread(target=_watch_parent, args=(ppid,), name="mimika-watch-parent",
-                     daemon=True).start()
+          lighting: Any, lp_threads: int, hidden: Sequence[str] = (), ppid: int = 0) -> None:
+    if ppid:
+        threading.Thread(target=_watch_parent, args=(ppid,), name="mimika-watch-parent",
+                         daemon=True).start()
     os.environ.setdefault("LP_NUM_THREADS", str(lp_threads))
     _worker.update(rig=rig, channels=channels,
-                   renderer=_open(rig, size, samples, skin, lighting))
+                   renderer=_open(rig, size, samples, skin, lighting, hidden))
 
 
 def _render_chunk(values: np.ndarray, camera: Any) -> np.ndarray:
@@ -86,18 +89,18 @@ def _stop(pool: Any) -> None:
 
 def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camera: Any,
                  size: tuple[int, int], samples: int = 0, skin: Any = False,
-                 lighting: Any = None, chunk: int = 50, workers: int = 1
-                 ) -> Iterator[np.ndarray]:
+                 lighting: Any = None, chunk: int = 50, workers: int = 1,
+                 hidden: Sequence[str] = ()) -> Iterator[np.ndarray]:
     """Yield the image (H, W, 3) uint8 of every row of ``values`` (T × channels AU
     intensities) on ``rig``'s head, in order.
 
     ``workers`` > 1 renders in that many spawned processes (at most ``workers + 1`` chunks of
     ``chunk`` frames in flight); 1 renders here. ``size``, ``samples``, ``skin`` and
-    ``lighting`` are those of :class:`~mimika.render.Renderer`.
+    ``lighting`` and ``hidden`` are those of :class:`~mimika.render.Renderer`.
     """
     starts = range(0, len(values), chunk)
     if workers <= 1:
-        with _open(rig, size, samples, skin, lighting) as r:
+        with _open(rig, size, samples, skin, lighting, hidden) as r:
             for i0 in starts:
                 yield from _draw(r, rig, values[i0:i0 + chunk], channels, camera)
         return
@@ -114,7 +117,7 @@ def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camer
     lp = 0 if lp <= 1 else lp
     with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_init,
                              initargs=(rig, list(channels), size, samples, skin, lighting,
-                                       lp, os.getpid())) as pool:
+                                       lp, tuple(hidden), os.getpid())) as pool:
         pending: deque = deque()
         try:
             for i0 in starts:

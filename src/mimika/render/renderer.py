@@ -142,6 +142,11 @@ def vertex_normals(
     return n
 
 
+#: alpha modes as the mesh shader's u_alpha_mode: opaque, mask (cut at 0.5), blend core (cut at
+#: 0.5, writes depth), blend fringe (only the soft edge below 0.5, blended, no depth write)
+_OPAQUE, _MASK, _CORE, _FRINGE = 0, 1, 2, 3
+
+
 class _GpuObject:
     """GPU state of one drawable object: dynamic VBO, index buffer, VAO and part ranges."""
 
@@ -154,23 +159,44 @@ class _GpuObject:
                 f"object {obj.name!r}: face indices must be in [0, {obj.n_vertices}), "
                 f"got [{faces.min()}, {faces.max()}]"
             )
-        if _winding_inward(obj.vertices, faces):
+        if not obj.oriented and _winding_inward(obj.vertices, faces):
             log.info("object %r: faces wind clockwise seen from outside; flipping", obj.name)
             faces = faces[:, [0, 2, 1]].copy()
         self.faces = faces
-        self.corners = tuple(np.ascontiguousarray(faces[:, k]) for k in range(3))
-        self.incidence = incidence_matrix(faces, obj.n_vertices)
-        self.parts: list[tuple[Material, int, int]] = []  # material, first index, index count
+        # normals: on the welded mesh when the object is split at UV seams
+        if obj.weld is not None:
+            self.weld_ids, self.weld_inv = np.unique(obj.weld, return_inverse=True)
+            wf = self.weld_inv[faces].astype(np.int32)
+            self.corners = tuple(np.ascontiguousarray(wf[:, k]) for k in range(3))
+            self.first_of = np.zeros(len(self.weld_ids), np.int64)
+            self.first_of[self.weld_inv[::-1]] = np.arange(obj.n_vertices)[::-1]
+            self.incidence = incidence_matrix(wf, len(self.weld_ids))
+        else:
+            self.weld_inv = None
+            self.corners = tuple(np.ascontiguousarray(faces[:, k]) for k in range(3))
+            self.incidence = incidence_matrix(faces, obj.n_vertices)
+        #: material, first index, index count, texture (or None), alpha mode
+        self.parts: list[tuple[Material, int, int, Any, str]] = []
+        textured = obj.uvs is not None and any(p.texture is not None for p in obj.parts)
+        self.textures: list[Any] = []
         first = 0
         for p in obj.parts:
-            self.parts.append((material(p.material), first, 3 * len(p.faces)))
+            tex = None
+            if textured and p.texture is not None:
+                tex = _upload_texture(ctx, p.texture.image)
+                self.textures.append(tex)
+            self.parts.append((material(p.material), first, 3 * len(p.faces), tex,
+                               p.alpha_mode if tex is not None else "opaque"))
             first += 3 * len(p.faces)
         self.interleaved = np.empty((obj.n_vertices, 6), np.float32)
         self.vbo = ctx.buffer(reserve=self.interleaved.nbytes, dynamic=True)
         self.ibo = ctx.buffer(faces.tobytes())
-        self.vao = ctx.vertex_array(
-            prog, [(self.vbo, "3f 3f", "in_position", "in_normal")], self.ibo, 4
-        )
+        layout = [(self.vbo, "3f 3f", "in_position", "in_normal")]
+        self.uv_vbo = None
+        if textured:
+            self.uv_vbo = ctx.buffer(np.ascontiguousarray(obj.uvs, np.float32).tobytes())
+            layout.append((self.uv_vbo, "2f", "in_uv"))
+        self.vao = ctx.vertex_array(prog, layout, self.ibo, 4)
         self.rest = obj.vertices
         self.holds_rest = False
 
@@ -181,13 +207,31 @@ class _GpuObject:
                 return
             positions = self.rest
         self.interleaved[:, :3] = positions
-        self.interleaved[:, 3:] = vertex_normals(positions, self.corners, self.incidence)
+        if self.weld_inv is None:
+            self.interleaved[:, 3:] = vertex_normals(positions, self.corners, self.incidence)
+        else:
+            n = vertex_normals(np.asarray(positions)[self.first_of], self.corners,
+                               self.incidence)
+            self.interleaved[:, 3:] = n[self.weld_inv]
         self.vbo.write(self.interleaved)
         self.holds_rest = positions is self.rest
 
     def release(self) -> None:
-        for o in (self.vao, self.ibo, self.vbo):
-            o.release()
+        for o in (self.vao, self.ibo, self.vbo, self.uv_vbo, *self.textures):
+            if o is not None:
+                o.release()
+
+
+def _upload_texture(ctx: Any, image: np.ndarray) -> Any:
+    """An RGBA8 texture with mipmaps from an (H, W, 3|4) uint8 image (row 0 = top)."""
+    img = np.asarray(image, np.uint8)
+    if img.shape[2] == 3:
+        img = np.concatenate([img, np.full((*img.shape[:2], 1), 255, np.uint8)], axis=2)
+    h, w = img.shape[:2]
+    tex = ctx.texture((w, h), 4, np.ascontiguousarray(img[::-1]).tobytes())
+    tex.build_mipmaps()
+    tex.filter = (ctx.LINEAR_MIPMAP_LINEAR, ctx.LINEAR)
+    return tex
 
 
 def _winding_inward(vertices: np.ndarray, faces: np.ndarray) -> bool:
@@ -221,13 +265,16 @@ class Renderer:
         those settings.
     lighting
         Lights and backdrop (:class:`mimika.render.skin.Lighting`); default: mimika's look.
+    hidden
+        Names of objects not to draw (e.g. ``("hair",)``).
 
     The GL context is created on the first :meth:`render`; ``close()`` (or leaving a
     ``with`` block) frees this renderer's GPU objects.
     """
 
     def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4,
-                 skin_shader: Any = False, lighting: Any = None) -> None:
+                 skin_shader: Any = False, lighting: Any = None,
+                 hidden: Any = ()) -> None:
         try:
             w, h = (int(s) for s in size)
         except (TypeError, ValueError):
@@ -241,6 +288,12 @@ class Renderer:
         self.samples = int(samples)
         self.skin_shader = skin_shader
         self.lighting = lighting
+        names = {o.name for o in head.objects}
+        unknown = sorted(set(hidden) - names)
+        if unknown:
+            raise ParameterError(f"hidden: head {head.name!r} has no object {unknown[0]!r}; "
+                                 f"objects: {', '.join(sorted(names))}")
+        self.hidden = frozenset(hidden)
         self._skin: Any = None
         self._cameras: dict[str, Camera] = {}
         self._gl: dict[str, Any] | None = None
@@ -297,28 +350,41 @@ class Renderer:
             prog = gl["prog"]
             prog["u_view"].write(cam.view_matrix.T.astype("f4").tobytes())
             prog["u_proj"].write(cam.projection_matrix.T.astype("f4").tobytes())
-            glass = []
+            glass, cut, fringe = [], [], []
             for o in self._objects:
-                for mat, first, count in o.parts:
+                for mat, first, count, tex, mode in o.parts:
                     if mat.alpha < 1.0:
-                        glass.append((o, mat, first, count))
+                        glass.append((o, mat, first, count, tex))
                         continue
-                    self._set_material(prog, mat)
+                    if mode != "opaque":
+                        cut.append((o, mat, first, count, tex))
+                        if mode == "blend":
+                            fringe.append((o, mat, first, count, tex))
+                        continue
                     if mat.cull:
                         ctx.enable(ctx.CULL_FACE)
                     else:
                         ctx.disable(ctx.CULL_FACE)
                     if skin is not None and skin.handles(o, first):
-                        skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE)
+                        skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE, tex)
                         continue
+                    self._set_material(prog, mat, tex, _OPAQUE)
                     o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
             ctx.disable(ctx.CULL_FACE)
-            if glass:
+            # cut-outs and the opaque core of blended parts (hair, lashes) write depth
+            for o, mat, first, count, tex in cut:
+                self._set_material(prog, mat, tex, _MASK)
+                o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+            if glass or fringe:
                 ctx.enable(ctx.BLEND)
-                ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
                 ctx.depth_mask = False
-                for o, mat, first, count in glass:
-                    self._set_material(prog, mat)
+                ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
+                for o, mat, first, count, tex in glass:
+                    self._set_material(prog, mat, tex, _OPAQUE)
+                    o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+                # soft edges of blended parts over everything drawn so far (premultiplied)
+                for o, mat, first, count, tex in fringe:
+                    self._set_material(prog, mat, tex, _FRINGE)
                     o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
                 ctx.depth_mask = True
                 ctx.disable(ctx.BLEND)
@@ -413,13 +479,20 @@ class Renderer:
         return out
 
     @staticmethod
-    def _set_material(prog: Any, m: Material) -> None:
+    def _set_material(prog: Any, m: Material, tex: Any = None, mode: int = _OPAQUE) -> None:
         prog["u_base"].value = m.color
         prog["u_specular"].value = m.specular
         prog["u_shininess"].value = m.shininess
         prog["u_wrap"].value = m.wrap
         prog["u_scatter"].value = m.scatter
         prog["u_alpha"].value = m.alpha
+        prog["u_textured"].value = tex is not None
+        prog["u_alpha_mode"].value = mode
+        # cut-outs and cards are seen from both sides: no darkening of their back faces
+        prog["u_backface"].value = BACKFACE if mode == _OPAQUE else 1.0
+        if tex is not None:
+            tex.use(location=0)
+            prog["u_tex"].value = 0
 
     def _setup(self) -> dict[str, Any]:
         if self._gl is not None:
@@ -496,7 +569,8 @@ class Renderer:
             gl["attachments"].append(depth)
             gl["fbo"] = gl["resolve"] = ctx.framebuffer(resolve_color, depth)
 
-        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects if o.parts]
+        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects
+                         if o.parts and o.name not in self.hidden]
         if self.skin_shader:
             from mimika.render.skin import DEFAULT_LIGHTING, SkinShader
 

@@ -125,15 +125,16 @@ def seam_faces(uv: np.ndarray, faces: np.ndarray, *, limit: float = 0.25) -> np.
 class _SkinObject:
     """Skin parts of one GPU object: UV buffer, index buffers and VAOs for passes (a), (c)."""
 
-    def __init__(self, ctx: Any, gpu: Any, uv: np.ndarray, progs: tuple[Any, Any]) -> None:
+    def __init__(self, ctx: Any, gpu: Any, uv: np.ndarray, raw_uv: np.ndarray,
+                 progs: tuple[Any, Any]) -> None:
         self.gpu = gpu
-        self.uv = np.ascontiguousarray(uv, np.float32)
-        self.uv_vbo = ctx.buffer(self.uv.tobytes())
+        self.uv = np.ascontiguousarray(uv, np.float32)  # normalised to the skin's UV frame
+        self.uv_vbo = ctx.buffer(np.ascontiguousarray(raw_uv, np.float32).tobytes())
         self.mask: np.ndarray | None = None  # vertices of the skin-shaded parts
         self.parts: dict[int, tuple[Any, Any, Any, int]] = {}  # first → (ibo, vao_a, vao_c, n)
         self.rest_parts: dict[int, tuple[Any, int]] = {}  # seam triangles: (ibo_std, n)
         faces = gpu.faces
-        for mat, first, count in gpu.parts:
+        for mat, first, count, *_ in gpu.parts:
             if mat.name not in SKIN_MATERIALS:
                 continue
             f = faces[first // 3: (first + count) // 3]
@@ -193,8 +194,8 @@ class SkinShader:
         # one UV frame for all skin parts: their bounding box → [0, 1]²
         used = []
         for o in objects:
-            if o.name in uvs and any(m.name in SKIN_MATERIALS for m, _, _ in o.parts):
-                sk = np.concatenate([o.faces[f // 3: (f + c) // 3] for m, f, c in o.parts
+            if o.name in uvs and any(m.name in SKIN_MATERIALS for m, *_ in o.parts):
+                sk = np.concatenate([o.faces[f // 3: (f + c) // 3] for m, f, c, *_ in o.parts
                                      if m.name in SKIN_MATERIALS])
                 used.append(np.asarray(uvs[o.name], np.float64)[np.unique(sk)])
         if not used:
@@ -210,8 +211,8 @@ class SkinShader:
         self.objects: dict[str, _SkinObject] = {}
         for o in objects:
             if o.name in uvs:
-                norm = (np.asarray(uvs[o.name], np.float64) - lo) / span
-                so = _SkinObject(ctx, o, norm, (self.irr, self.final))
+                raw = np.asarray(uvs[o.name], np.float64)
+                so = _SkinObject(ctx, o, (raw - lo) / span, raw, (self.irr, self.final))
                 if so.parts:
                     self.objects[o.name] = so
                 else:
@@ -255,7 +256,7 @@ class SkinShader:
         self.fbo_irr.clear(0.0, 0.0, 0.0, 0.0)
         for so in self.objects.values():
             for first, (_, vao_a, _, n) in so.parts.items():
-                mat = next(m for m, f, _ in so.gpu.parts if f == first)
+                mat = next(m for m, f, *_ in so.gpu.parts if f == first)
                 self.irr["u_wrap"].value = mat.wrap
                 self.irr["u_scatter"].value = mat.scatter
                 vao_a.render(ctx.TRIANGLES, vertices=n)
@@ -309,13 +310,18 @@ class SkinShader:
         return (x0, y0, x1 - x0, y1 - y0)
 
     def draw(self, ctx: Any, gpu: Any, first: int, mat: Any, proj_matrix: np.ndarray,
-             backface: float) -> None:
-        """Pass (c) for one part (its seam triangles with the sharp irradiance only)."""
+             backface: float, albedo: Any = None) -> None:
+        """Pass (c) for one part (its seam triangles with the sharp irradiance only);
+        ``albedo``: the part's texture (RGB colour, alpha a gloss map) or None."""
         so = self.objects[gpu.name]
         _, _, vao_c, n = so.parts[first]
         self.result.use(location=0)
         f = self.final
         f["u_irr"].value = 0
+        f["u_textured"].value = albedo is not None
+        if albedo is not None:
+            albedo.use(location=1)
+            f["u_albedo"].value = 1
         f["u_proj"].write(proj_matrix.T.astype("f4").tobytes())
         f["u_base"].value = mat.color
         f["u_specular"].value = mat.specular * self.params.specular

@@ -1,5 +1,7 @@
-"""Exports of one utterance's timing: viseme cues (Oculus-15, Rhubarb A–X, MPEG-4, TalkingHead),
-seed 004's five mouth parameters, and AU CSV.
+"""Exports of one utterance's timing: viseme cues (Oculus-15, Rhubarb A–X, MPEG-4, TalkingHead,
+OVRLipSync per-frame weights), seed 004's five mouth parameters, and AU CSV.
+
+The file layouts other players read live in :mod:`mimika.io.visemes`.
 
 Cue boundaries sit at phoneme (segment) starts; consecutive equal visemes are merged.
 Glottal /h ʔ/ take the viseme of the following sound (the lips already shape it).
@@ -16,18 +18,19 @@ from typing import Any
 import numpy as np
 
 from mimika.errors import ParameterError
+from mimika.io import visemes as vfiles
 from mimika.speech.phonemes import Segment, segments, viseme_table
 from mimika.speech.utterance import Utterance, write_text_atomic
 from mimika.tracks import AUTrack
 
-FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead")
+FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead", "ovr")
 
 
 def viseme_cues(utterance: Utterance, *, format: str = "oculus") -> list[dict[str, Any]]:
     """Viseme cues ``[{"start", "end", "value", "phonemes"}]`` (seconds) in ``format``
     (``oculus`` → names like ``PP``, ``rhubarb`` → ``A``…``X``, ``mpeg4`` → 0–14)."""
     key = {"oculus": "oculus", "rhubarb": "rhubarb", "mpeg4": "mpeg4",
-           "talkinghead": "oculus"}.get(format)
+           "talkinghead": "oculus", "ovr": "oculus"}.get(format)
     if key is None:
         raise ParameterError(f"viseme format {format!r} is not one of oculus, rhubarb, mpeg4")
     classes = viseme_table()["classes"]
@@ -58,21 +61,10 @@ def viseme_cues(utterance: Utterance, *, format: str = "oculus") -> list[dict[st
 
 
 def rhubarb_json(utterance: Utterance, *, sound_file: str = "") -> dict[str, Any]:
-    """Rhubarb Lip Sync's JSON: ``{"metadata": {"soundFile", "duration"},
-    "mouthCues": [{"start", "end", "value"}]}`` with times rounded to 0.01 s as Rhubarb writes."""
-    cues = []
-    for c in viseme_cues(utterance, format="rhubarb"):
-        s, e = round(c["start"], 2), round(c["end"], 2)
-        if e <= s:
-            continue
-        if cues and cues[-1]["value"] == c["value"]:
-            cues[-1]["end"] = e
-        else:
-            if cues:
-                cues[-1]["end"] = s
-            cues.append({"start": s, "end": e, "value": c["value"]})
-    return {"metadata": {"soundFile": sound_file, "duration": round(utterance.duration, 2)},
-            "mouthCues": cues}
+    """Rhubarb Lip Sync's JSON (:func:`mimika.io.visemes.rhubarb_document`): cues from 0 to
+    the end in centiseconds, ending on ``X``; ``soundFile`` absolute as Rhubarb writes it."""
+    return vfiles.rhubarb_document(viseme_cues(utterance, format="rhubarb"),
+                                   duration=utterance.duration, sound_file=sound_file)
 
 
 def seed004_keyframes(utterance: Utterance, track: AUTrack | None = None) -> list[dict]:
@@ -101,8 +93,9 @@ def seed004_keyframes(utterance: Utterance, track: AUTrack | None = None) -> lis
 
 
 def viseme_document(utterance: Utterance, *, format: str = "oculus", sound_file: str = "",
-                    track: AUTrack | None = None) -> dict[str, Any]:
-    """The JSON document ``mimika say --visemes`` writes for ``format`` (docs/speech.md)."""
+                    track: AUTrack | None = None, fps: float = 100.0) -> dict[str, Any]:
+    """The JSON document ``mimika say --visemes`` writes for ``format`` (docs/speech.md);
+    ``ovr`` is an OVRLipSyncSequence with frames at ``fps``."""
     if format not in FORMATS:
         raise ParameterError(f"viseme format {format!r} must be one of {', '.join(FORMATS)}")
     if format == "rhubarb":
@@ -115,15 +108,12 @@ def viseme_document(utterance: Utterance, *, format: str = "oculus", sound_file:
                                                  if k != "about"],
                 "keyframes": seed004_keyframes(utterance, track)}
     if format == "talkinghead":
-        cues = viseme_cues(utterance, format="oculus")
-        cues = [c for c in cues if c["value"] != "sil"]
-        words = [w for w in utterance.words if w.text]
-        return {"words": [w.text for w in words],
-                "wtimes": [round(w.start * 1000) for w in words],
-                "wdurations": [round((w.end - w.start) * 1000) for w in words],
-                "visemes": [c["value"] for c in cues],
-                "vtimes": [round(c["start"] * 1000) for c in cues],
-                "vdurations": [round((c["end"] - c["start"]) * 1000) for c in cues]}
+        words = [(w.text, w.start, w.end) for w in utterance.words if w.text]
+        return vfiles.talkinghead_document(viseme_cues(utterance, format="oculus"), words)
+    if format == "ovr":
+        w = vfiles.viseme_frames(viseme_cues(utterance, format="oculus"), fps=fps,
+                                 duration=utterance.duration)
+        return vfiles.ovr_sequence(w, length=utterance.duration)
     cues = viseme_cues(utterance, format=format)
     names = viseme_table()[format]
     return {"format": "mimika-visemes", "version": 1, "visemes": format, "metadata": meta,
@@ -135,9 +125,18 @@ def viseme_document(utterance: Utterance, *, format: str = "oculus", sound_file:
 
 
 def write_visemes(path: str | os.PathLike, utterance: Utterance, *, format: str = "oculus",
-                  sound_file: str = "", track: AUTrack | None = None) -> None:
-    """Write :func:`viseme_document` as JSON (atomically)."""
-    doc = viseme_document(utterance, format=format, sound_file=sound_file, track=track)
+                  sound_file: str = "", track: AUTrack | None = None,
+                  fps: float = 100.0) -> None:
+    """Write :func:`viseme_document` as JSON (atomically); a ``.csv`` path gets the per-frame
+    Oculus viseme weights at ``fps`` (formats ``oculus`` and ``ovr``)."""
+    if str(path).lower().endswith(".csv"):
+        if format not in ("oculus", "ovr"):
+            raise ParameterError(f"a .csv viseme file holds per-frame Oculus weights; "
+                                 f"--format {format} writes JSON")
+        vfiles.write_viseme_weights(path, viseme_cues(utterance, format="oculus"), fps=fps,
+                                    duration=utterance.duration)
+        return
+    doc = viseme_document(utterance, format=format, sound_file=sound_file, track=track, fps=fps)
     write_text_atomic(path, json.dumps(doc, ensure_ascii=False, indent=1))
 
 

@@ -20,7 +20,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from mimika.errors import ParameterError
-from mimika.facs import parse_au
+from mimika.facs import BODY_CHANNELS, is_body, parse_au
 from mimika.limits import check_timeline
 from mimika.timeline.easing import get_interpolator
 from mimika.timeline.model import DIRECTIONS, KIND_TIMING, Channel, Event, Timeline
@@ -83,7 +83,9 @@ def resolve_event(event: Event, library: ExpressionSource | None = None) -> Reso
 
 
 def au_order(code: str) -> tuple[int, int]:
-    """Sort key: catalogue order, bilateral before L before R."""
+    """Sort key: catalogue order, bilateral before L before R; body channels last."""
+    if is_body(code):
+        return (1000 + list(BODY_CHANNELS).index(code), 0)
     return (int(code[2:4]), ("", "L", "R").index(code[4:]))
 
 

@@ -5,8 +5,12 @@
 // Kept cheap: it runs per pixel on llvmpipe (no pow in the sRGB encode, one pow per light).
 in vec3 v_pos;
 in vec3 v_normal;
+in vec2 v_uv;
 
 uniform vec3 u_base;        // linear base colour
+uniform bool u_textured;    // base colour (sRGB) and alpha from u_tex instead
+uniform sampler2D u_tex;
+uniform int u_alpha_mode;   // 0 opaque, 1 cut at 0.5, 3 soft fringe below 0.5 (blended)
 uniform float u_specular;   // specular strength
 uniform float u_shininess;  // Blinn-Phong exponent
 uniform float u_wrap;       // wrap diffuse (0 = Lambert)
@@ -37,11 +41,13 @@ vec3 tonemap(vec3 c) {
     return min(x, knee) + over / (1.0 + over / (1.0 - knee.x));
 }
 
+vec3 base;
+
 vec3 diffuse(vec3 n, vec3 l) {
     float ndl = dot(n, l);
     float lambert = max(ndl, 0.0);
     float wrapped = max((ndl + u_wrap) / (1.0 + u_wrap), 0.0);
-    return u_base * (lambert + max(wrapped - lambert, 0.0) * u_scatter);
+    return base * (lambert + max(wrapped - lambert, 0.0) * u_scatter);
 }
 
 float specular(vec3 n, vec3 v, vec3 l) {
@@ -55,6 +61,15 @@ float specular(vec3 n, vec3 v, vec3 l) {
 }
 
 void main() {
+    base = u_base;
+    float a = 1.0;
+    if (u_textured) {
+        vec4 t = texture(u_tex, v_uv);
+        base = pow(t.rgb, vec3(2.2));
+        a = t.a;
+        if (u_alpha_mode == 1 && a < 0.5) discard;
+        if (u_alpha_mode == 3 && (a >= 0.5 || a < 0.02)) discard;
+    }
     vec3 n = normalize(v_normal);
     float facing = 1.0;
     if (!gl_FrontFacing) {
@@ -66,7 +81,11 @@ void main() {
     vec3 c = u_key_col * (diffuse(n, u_key_dir) * u_alpha + specular(n, v, u_key_dir))
            + u_fill_col * (diffuse(n, u_fill_dir) * u_alpha + specular(n, v, u_fill_dir))
            + u_rim_col * diffuse(n, u_rim_dir) * u_alpha;
-    vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * u_base * u_alpha;
+    vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha;
     c = (c + ambient) * facing;
+    if (u_alpha_mode == 3) {  // premultiplied soft edge
+        f_color = vec4(to_srgb(tonemap(c)) * a, a);
+        return;
+    }
     f_color = vec4(to_srgb(tonemap(c)), u_alpha);
 }

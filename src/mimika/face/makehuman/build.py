@@ -1,0 +1,281 @@
+"""Assemble a MakeHuman character: shaped body, fitted proxies, eyes, faceunit shapes, skeleton.
+
+Steps (all deterministic):
+
+1. the hm08 base mesh shaped by the macro targets of the phenotype (:mod:`.targets`);
+2. the reduced skeleton on it (:mod:`.skeleton`) and a seated rest pose (arms lowered);
+3. proxies (clothes, hair, brows, lashes, teeth, tongue) fitted by their ``.mhclo`` bindings;
+   body faces a proxy hides (``delete_verts``) are dropped;
+4. eyeballs placed on the base mesh's eye helpers;
+5. the 52 ARKit faceunits as per-object shape deltas (proxies follow through their bindings);
+6. everything scaled to cm and moved so the eyes sit where the built-in head's do.
+
+The skin is split at UV seams (one render vertex per position × UV); ``weld`` remembers the
+position each render vertex came from, so normals stay smooth across seams.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from mimika.errors import DataError
+from mimika.face.eyeball import eyeball_object
+from mimika.face.makehuman.base import BaseMesh, load_base
+from mimika.face.makehuman.proxy import Proxy, read_mhclo
+from mimika.face.makehuman.skeleton import Skeleton, build_skeleton
+from mimika.face.makehuman.targets import apply_macros, faceunit_names, read_faceunit
+
+log = logging.getLogger(__name__)
+
+ASSETS = Path(__file__).parent / "assets"
+#: dm → cm
+SCALE = 10.0
+#: where the eye centres' midpoint goes (the built-in head's eyes), cm
+EYE_MID = np.array([0.0, 3.6, 8.4])
+
+
+@dataclass
+class Piece:
+    """One object under construction: positions in base units, faces per material, UVs, the
+    sparse map from base vertices (for faceunits and skin weights) and an extra offset."""
+
+    name: str
+    category: str
+    vertices: np.ndarray
+    parts: dict[str, np.ndarray]
+    uvs: np.ndarray | None
+    binding: sp.csr_matrix | None  #: (n, N_base) — vertices = binding @ base + offsets
+    weld: np.ndarray | None = None
+    pivot: np.ndarray | None = None
+    meta: dict = field(default_factory=dict)
+
+
+def asset_path(kind: str, name: str) -> Path:
+    """``assets/<kind>/<name>/<name>.mhclo``, or a DataError listing what is there."""
+    p = ASSETS / kind / name / f"{name}.mhclo"
+    if not p.is_file():
+        have = sorted(d.name for d in (ASSETS / kind).iterdir() if d.is_dir())
+        raise DataError(f"unknown {kind} {name!r}; available: {', '.join(have)}")
+    return p
+
+
+def split_by_uv(quads: np.ndarray, quad_uvs: np.ndarray, uvs: np.ndarray):
+    """Render vertices for quads with per-corner UVs: returns (source vertex (R,), UV (R, 2),
+    triangles (2Q, 3) into the render vertices)."""
+    pairs = np.stack([quads.ravel(), quad_uvs.ravel()], 1)
+    uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+    q = inv.reshape(-1, 4)
+    tris = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+    return uniq[:, 0], uvs[uniq[:, 1]], tris
+
+
+def triangulate(faces: np.ndarray) -> np.ndarray:
+    """Quads (or triangles) (F, 3|4) → triangles."""
+    f = np.asarray(faces)
+    return f if f.shape[1] == 3 else np.concatenate([f[:, [0, 1, 2]], f[:, [0, 2, 3]]])
+
+
+def proxy_piece(proxy: Proxy, name: str, category: str, material: str, n_base: int,
+                base: np.ndarray) -> Piece:
+    """A fitted proxy as a piece (faces from its OBJ, UVs split at seams)."""
+    mesh = proxy.mesh
+    if mesh.uvs is not None and mesh.face_uvs is not None:
+        pairs = np.stack([mesh.faces.ravel(), mesh.face_uvs.ravel()], 1)
+        uniq, inv = np.unique(pairs, axis=0, return_inverse=True)
+        src, uv, tris = uniq[:, 0], mesh.uvs[uniq[:, 1]], inv.reshape(-1, 3)
+    else:
+        src, uv, tris = np.arange(len(mesh.vertices)), None, mesh.faces
+    bind = proxy.binding(n_base)[src]
+    offs = proxy.offset_vectors(base)[src]
+    return Piece(name, category, (bind @ base + offs).astype(np.float32), {material: tris}, uv,
+                 sp.csr_matrix(bind), weld=src, meta={"offsets": offs, "proxy": proxy.name})
+
+
+def _eye_piece(base: BaseMesh, verts: np.ndarray, side: str) -> Piece:
+    ids = base.group(f"helper-{side[0].lower()}-eye")
+    p = verts[ids]
+    c = p.mean(0)
+    r = 0.5 * float((p.max(0) - p.min(0)).mean())
+    name = f"eye_{side[0]}"
+    o = eyeball_object(name, c, r, pupil_radius=0.22 * r, iris_radius=0.47 * r,
+                       iris_depth=0.03 * r, rings=(3, 4, 14), n_lon=32, cornea=0.2 * r)
+    parts = {p_.material: p_.faces for p_ in o.parts}
+    # an eyeball moves rigidly with the head: bind every vertex to the eye helper's centroid
+    nv = o.n_vertices
+    bind = sp.csr_matrix((np.full(nv * len(ids), 1.0 / len(ids)),
+                          (np.repeat(np.arange(nv), len(ids)), np.tile(ids, nv))),
+                         shape=(nv, len(verts)))
+    return Piece(name, "eyes", o.vertices, parts, o.uvs, bind, pivot=c,
+                 meta={"offsets": o.vertices - c, "rigid": True})
+
+
+def _first_hit(orig: np.ndarray, dirs: np.ndarray, tris: np.ndarray, reach: float
+               ) -> np.ndarray:
+    """Distance along each ray (orig, dirs: (N, 3)) to the nearest of ``tris`` (M, 3, 3)
+    within ``reach``, or inf (Möller–Trumbore over all candidate triangles)."""
+    a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+    e1, e2 = b - a, c - a
+    out = np.full(len(orig), np.inf)
+    for k in range(len(orig)):
+        d = dirs[k]
+        p = np.cross(d, e2)
+        det = (e1 * p).sum(1)
+        ok = np.abs(det) > 1e-12
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        s = orig[k] - a
+        u = (s * p).sum(1) * inv
+        q = np.cross(s, e1)
+        v = (q @ d) * inv
+        t = (e2 * q).sum(1) * inv
+        hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0) & (t < reach)
+        if hit.any():
+            out[k] = t[hit].min()
+    return out
+
+
+def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
+               margin: float = 0.03) -> int:
+    """Push skin vertices that poke through ``cloth`` back under it, in place: a vertex whose
+    inward ray meets the cloth within ``reach`` (base units) moves inward past it by
+    ``margin``, under every layer. Returns how many moves it made. (``delete_verts`` hides
+    most of the covered body; this fixes the edges: collars, cuffs.)"""
+    from scipy.spatial import cKDTree
+
+    from mimika.face.meshgen import vertex_normals
+
+    # one normal and one move per position: the skin is split at UV seams (weld)
+    ids, inv = np.unique(skin_piece.weld, return_inverse=True)
+    first = np.zeros(len(ids), np.int64)
+    first[inv[::-1]] = np.arange(len(inv))[::-1]
+    v = skin_piece.vertices.astype(np.float64)[first]
+    tris_all = inv[np.concatenate(list(skin_piece.parts.values()))]
+    n = vertex_normals(v, tris_all)
+    cf = np.concatenate(list(cloth.parts.values()))
+    tri = cloth.vertices.astype(np.float64)[cf]
+    kd = cKDTree(tri.mean(1))
+    near = np.flatnonzero(kd.query(v, distance_upper_bound=reach * 2)[0] < np.inf)
+    moved = 0
+    for i in near:
+        for _ in range(4):  # layered clothes (collar over shirt): tuck under each layer
+            cand = kd.query_ball_point(v[i], reach * 3)
+            t = _first_hit(v[i:i + 1], -n[i:i + 1], tri[cand], reach)[0]
+            if not np.isfinite(t):
+                break
+            v[i] -= n[i] * (t + margin)
+            moved += 1
+    skin_piece.vertices = v[inv].astype(np.float32)
+    return moved
+
+
+#: skin influences per vertex (what glTF players and game engines take)
+MAX_INFLUENCES = 4
+
+
+def top_influences(w: sp.csr_matrix, k: int = MAX_INFLUENCES) -> sp.csr_matrix:
+    """Keep each row's ``k`` largest weights, renormalised to sum to 1."""
+    dense = np.asarray(w.todense(), np.float64)
+    if dense.shape[1] > k:
+        cut = -np.sort(-dense, axis=1)[:, k - 1:k]
+        dense = np.where(dense >= cut, dense, 0.0)
+        # ties at the cut could leave more than k: keep the first k in bone order
+        over = np.cumsum(dense > 0, axis=1) > k
+        dense[over] = 0.0
+    s = dense.sum(1, keepdims=True)
+    out = sp.csr_matrix(dense / np.where(s > 0, s, 1.0))
+    out.eliminate_zeros()
+    return out
+
+
+@dataclass(frozen=True)
+class Outfit:
+    """What the character wears: asset names (``None`` for none)."""
+
+    hair: str | None = "short02"
+    eyebrows: str | None = "eyebrow001"
+    eyelashes: str | None = "eyelashes01"
+    clothes: tuple[str, ...] = ("male_elegantsuit01",)
+
+
+@dataclass
+class Built:
+    """A character in bind space (base units, before the rest pose): pieces, skeleton,
+    faceunit shape deltas per piece (S, n, 3), and skin weights per piece (n, B)."""
+
+    pieces: list[Piece]
+    skeleton: Skeleton
+    shape_names: tuple[str, ...]
+    deltas: dict[str, np.ndarray]
+    weights: dict[str, sp.csr_matrix]
+    base_vertices: np.ndarray
+
+
+def _skin_piece(base: BaseMesh, verts: np.ndarray, hidden: np.ndarray) -> Piece:
+    body = base.faces_of("body")
+    keep = ~np.all(np.isin(base.quads[body], hidden), axis=1)
+    quads = base.quads[body][keep]
+    src, uv, tris = split_by_uv(quads, base.quad_uvs[body][keep], base.uvs)
+    n = len(verts)
+    bind = sp.csr_matrix((np.ones(len(src)), (np.arange(len(src)), src)), shape=(len(src), n))
+    return Piece("skin", "face", verts[src], {"skin": tris}, uv, bind, weld=src,
+                 meta={"offsets": np.zeros((len(src), 3))})
+
+
+def _helper_piece(base: BaseMesh, verts: np.ndarray, group: str, name: str, category: str,
+                  material: str) -> Piece:
+    """A piece made of the base mesh's own helper faces (e.g. the tongue)."""
+    quads = base.quads[base.faces_of(group)]
+    src, inv = np.unique(quads, return_inverse=True)
+    tris = triangulate(inv.reshape(-1, 4))
+    bind = sp.csr_matrix((np.ones(len(src)), (np.arange(len(src)), src)),
+                         shape=(len(src), len(verts)))
+    return Piece(name, category, verts[src], {material: tris}, None, bind, weld=None,
+                 meta={"offsets": np.zeros((len(src), 3))})
+
+
+def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
+    """The character for ``phenotype`` values (see :mod:`.targets`) wearing ``outfit``."""
+    base = load_base()
+    verts = apply_macros(base.vertices, phenotype)
+    skel = build_skeleton(base, verts)
+    n = len(verts)
+    proxies: list[tuple[str, str, str, Proxy]] = []
+    for kind, name, obj, cat, mat in (
+        ("hair", outfit.hair, "hair", "face", "hair"),
+        ("eyebrows", outfit.eyebrows, "brows", "face", "brow"),
+        ("eyelashes", outfit.eyelashes, "lashes", "face", "lash"),
+    ):
+        if name:
+            proxies.append((obj, cat, mat, read_mhclo(asset_path(kind, name))))
+    for k, name in enumerate(outfit.clothes):
+        proxies.append((f"clothes{k}" if k else "clothes", "body", "cloth",
+                        read_mhclo(asset_path("clothes", name))))
+    hidden = np.unique(np.concatenate([p.delete_verts for *_, p in proxies] or
+                                      [np.zeros(0, np.int64)]))
+    pieces = [_skin_piece(base, verts, hidden)]
+    pieces += [_eye_piece(base, verts, "L"), _eye_piece(base, verts, "R")]
+    teeth = read_mhclo(asset_path("teeth", "teeth_base"))
+    pieces.append(proxy_piece(teeth, "teeth", "teeth", "teeth", n, verts))
+    pieces.append(_helper_piece(base, verts, "helper-tongue", "tongue", "teeth", "tongue"))
+    for obj, cat, mat, proxy in proxies:
+        pieces.append(proxy_piece(proxy, obj, cat, mat, n, verts))
+
+    for p in pieces:
+        if p.category == "body":
+            tuck_under(pieces[0], p)
+    names = faceunit_names()
+    dense = np.stack([read_faceunit(s).dense(n) for s in names])  # (S, N, 3)
+    deltas, weights = {}, {}
+    for p in pieces:
+        if p.category == "eyes":  # eyes turn by rotation (the rig), not by faceunit offsets
+            deltas[p.name] = np.zeros((len(names), len(p.vertices), 3), np.float32)
+        else:
+            deltas[p.name] = np.stack([p.binding @ d for d in dense]).astype(np.float32)
+        weights[p.name] = top_influences(sp.csr_matrix(p.binding @ skel.weights))
+    log.debug("character: %d pieces, %d vertices", len(pieces),
+              sum(len(p.vertices) for p in pieces))
+    return Built(pieces, skel, names, deltas, weights, verts)

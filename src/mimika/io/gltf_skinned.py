@@ -1,0 +1,306 @@
+"""glTF 2.0 export of a skinned character (:class:`~mimika.face.rigs.skinned.SkinnedRig`):
+the whole person — meshes with their textures, the skeleton, AU morph targets, animation.
+
+Layout (metres; the character is modelled in cm)::
+
+    root → spine05 → … → neck01 → neck02 → neck03 → head ─┬─ eye_L (rigid, AU61–64)
+                     └→ clavicle.L → shoulder01.L → …    └─ eye_R
+    skin, hair, brows, lashes, teeth, tongue, clothes (skinned to every joint)
+
+* joints sit at their bind positions with identity orientation, so a joint's local rotation
+  is the rig's rotation about the bone's head in world axes; the rest pose (arms lowered) is
+  the joints' default rotation, vertices are in bind space;
+* morph targets: the rig's shape offsets per modelled AU (and L/R side) in bind space —
+  morphs apply before skinning in glTF, as in the rig; names in ``mesh.extras.targetNames``;
+* materials carry the painted textures (PNG, sRGB) with ``alphaMode`` BLEND for hair and
+  lashes, MASK for cut-outs; skin textures drop their alpha (a gloss map for mimika's shader);
+* animation ``mimika``: morph weights, joint rotations (head AUs shared over neck and head,
+  body channels, rest pose) and eye rotations, sampled from an AUTrack.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import Any
+
+import numpy as np
+
+import mimika
+from mimika.face.head import Part
+from mimika.facs import AU_CATALOGUE
+from mimika.io.gltf import (
+    _ARRAY,
+    _ELEMENTS,
+    _FLOAT,
+    _UINT,
+    _USHORT,
+    SCALE,
+    _Builder,
+    _materials,
+    _normals,
+    _quat,
+    _srgb_to_linear,
+    timing_extras,
+)
+from mimika.tracks import AUTrack
+
+_SKIN_MATERIALS = ("skin", "lips", "skin_body")
+_TWO_SIDED = ("hair", "brow", "lash", "cloth", "cornea")
+
+
+def _png(image: np.ndarray, drop_alpha: bool) -> bytes:
+    from PIL import Image
+
+    img = np.asarray(image, np.uint8)
+    if drop_alpha and img.shape[2] == 4:
+        img = img[:, :, :3]
+    buf = io.BytesIO()
+    Image.fromarray(img).save(buf, format="PNG", optimize=False)
+    return buf.getvalue()
+
+
+class _Materials:
+    """glTF materials (+ images, textures) per (material name, texture) of the parts."""
+
+    def __init__(self, b: _Builder) -> None:
+        self.b = b
+        self.src = _materials()
+        self.materials: list[dict] = []
+        self.images: list[dict] = []
+        self.textures: list[dict] = []
+        self._index: dict[tuple, int] = {}
+
+    def get(self, part: Part) -> int:
+        key = (part.material, id(part.texture), part.alpha_mode)
+        if key in self._index:
+            return self._index[key]
+        m = self.src.get(part.material, self.src.get("_default", {"color": "#9a9a9a"}))
+        shin = float(m.get("shininess", 20.0))
+        alpha = float(m.get("alpha", 1.0))
+        pbr: dict[str, Any] = {"baseColorFactor": [*_srgb_to_linear(m["color"]), alpha],
+                               "metallicFactor": 0.0,
+                               "roughnessFactor": round(float(np.sqrt(2.0 / (shin + 2.0))), 4)}
+        out: dict[str, Any] = {"name": part.material, "pbrMetallicRoughness": pbr}
+        if part.texture is not None:
+            data = _png(part.texture.image, part.material in _SKIN_MATERIALS)
+            view = self.b.add_bytes(data)
+            self.images.append({"bufferView": view, "mimeType": "image/png",
+                                "name": part.texture.name or part.material})
+            self.textures.append({"source": len(self.images) - 1, "sampler": 0})
+            pbr["baseColorTexture"] = {"index": len(self.textures) - 1}
+            pbr["baseColorFactor"] = [1.0, 1.0, 1.0, alpha]
+        if part.alpha_mode == "blend" or alpha < 1.0:
+            out["alphaMode"] = "BLEND"
+        elif part.alpha_mode == "mask":
+            out["alphaMode"], out["alphaCutoff"] = "MASK", 0.5
+        if part.material in _TWO_SIDED:
+            out["doubleSided"] = True
+        self.materials.append(out)
+        self._index[key] = len(self.materials) - 1
+        return self._index[key]
+
+
+def _morph_codes(rig: Any) -> list[str]:
+    """AUs (and sides) with shape offsets: the morph targets, in catalogue order."""
+    return [c for c in rig.supported if c in AU_CATALOGUE or c[:4] in AU_CATALOGUE
+            if AU_CATALOGUE[c[:4]].group != "head" and rig.shape_deltas(c)]
+
+
+def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | None = None
+                       ) -> tuple[dict, bytes]:
+    """The glTF document and binary buffer of a skinned character (+ ``track``)."""
+    sk = rig.skinning
+    bind = rig.bind_head
+    b = _Builder()
+    mats = _Materials(b)
+    nb = len(sk.names)
+    heads = np.asarray(sk.heads, float)
+    rest = {sk.names.index(k): np.asarray(v, float) for k, v in sk.rest_pose.items()}
+
+    nodes: list[dict] = []
+    for i, bone in enumerate(sk.names):
+        p = sk.parents[i]
+        t = heads[i] - (heads[p] if p >= 0 else 0.0)
+        node: dict[str, Any] = {"name": bone, "translation": [float(x) for x in t * SCALE]}
+        if i in rest:
+            node["rotation"] = [float(x) for x in _quat(rest[i][None])[0]]
+        nodes.append(node)
+    for i in range(nb):
+        kids = [j for j in range(nb) if sk.parents[j] == i]
+        if kids:
+            nodes[i]["children"] = kids
+    ibm = np.zeros((nb, 4, 4), np.float32)
+    for i in range(nb):
+        m = np.eye(4, dtype=np.float32)
+        m[:3, 3] = -heads[i] * SCALE
+        ibm[i] = m.T  # column-major
+    skin = {"name": "skeleton", "joints": list(range(nb)), "skeleton": 0,
+            "inverseBindMatrices": b.add(ibm.reshape(nb, 16), "MAT4", _FLOAT)}
+
+    codes = _morph_codes(rig)
+    deltas = {c: rig.shape_deltas(c) for c in codes}
+    head_j = sk.names.index("head")
+    meshes: list[dict] = []
+    roots = [0]
+    morph_nodes: list[tuple[int, list[str]]] = []
+    eye_nodes: list[tuple[int, str]] = []
+    for o in bind.objects:
+        if not o.parts:
+            continue
+        eye = o.category == "eyes" and o.pivot is not None
+        origin = np.asarray(o.pivot, float) if eye else np.zeros(3)
+        v = ((o.vertices - origin) * SCALE).astype(np.float32)
+        attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
+                 "NORMAL": b.add(_normals(v, o.faces.astype(np.int64)), "VEC3", _FLOAT,
+                                 target=_ARRAY)}
+        if o.uvs is not None:
+            uv = np.asarray(o.uvs, np.float32).copy()
+            uv[:, 1] = 1.0 - uv[:, 1]  # glTF: v grows downward
+            attrs["TEXCOORD_0"] = b.add(uv, "VEC2", _FLOAT, target=_ARRAY)
+        if not eye:
+            joints, wts = _top4(sk.weights[o.name])
+            attrs["JOINTS_0"] = b.add(joints, "VEC4", _USHORT, target=_ARRAY)
+            attrs["WEIGHTS_0"] = b.add(wts, "VEC4", _FLOAT, target=_ARRAY)
+        names, targets = [], []
+        for c in codes:
+            d = deltas[c].get(o.name)
+            if d is None or eye or np.abs(d).max() <= 1e-6:
+                continue
+            names.append(c)
+            targets.append({"POSITION": b.add((d * SCALE).astype(np.float32), "VEC3",
+                                              _FLOAT, target=_ARRAY, minmax=True)})
+        prims = []
+        for part in o.parts:
+            idx = part.faces.astype(np.uint32).reshape(-1)
+            prim = {"attributes": attrs, "indices": b.add(idx, "SCALAR", _UINT,
+                                                          target=_ELEMENTS, minmax=True),
+                    "material": mats.get(part), "mode": 4}
+            if targets:
+                prim["targets"] = targets
+            prims.append(prim)
+        mesh: dict[str, Any] = {"name": o.name, "primitives": prims}
+        if targets:
+            mesh["weights"] = [0.0] * len(targets)
+            mesh["extras"] = {"targetNames": names}
+        meshes.append(mesh)
+        node = {"name": o.name, "mesh": len(meshes) - 1}
+        nodes.append(node)
+        ni = len(nodes) - 1
+        if eye:
+            node["translation"] = [float(x) for x in (origin - heads[head_j]) * SCALE]
+            nodes[head_j].setdefault("children", []).append(ni)
+            eye_nodes.append((ni, o.name))
+        else:
+            node["skin"] = 0
+            roots.append(ni)
+        if targets:
+            morph_nodes.append((ni, names))
+
+    doc: dict[str, Any] = {
+        "asset": {"version": "2.0", "generator": f"mimika {mimika.__version__}"},
+        "scene": 0,
+        "scenes": [{"name": name or rig.head.name, "nodes": roots}],
+        "nodes": nodes, "meshes": meshes, "materials": mats.materials, "skins": [skin],
+        "extras": {"units": "metres (character modelled in cm)", "aus": codes,
+                   "character": rig.head.meta.get("character", rig.head.name),
+                   "rig": rig_description(rig)},
+    }
+    if mats.textures:
+        doc["images"], doc["textures"] = mats.images, mats.textures
+        doc["samplers"] = [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071,
+                            "wrapT": 33071}]
+    if track is not None and track.n_frames:
+        # Blender turns an animated skinned node into an empty named like the node plus a
+        # mesh object named like the mesh: name the node apart so the mesh keeps its name
+        for ni, _ in morph_nodes:
+            if "skin" in nodes[ni]:
+                nodes[ni]["name"] = f"{nodes[ni]['name']}_morphs"
+        timing = timing_extras(track)
+        doc["scenes"][0]["extras"] = timing
+        doc["animations"] = [_animation(b, rig, track, morph_nodes, eye_nodes)]
+        doc["animations"][0]["extras"] = dict(timing)
+    doc["accessors"] = b.accessors
+    doc["bufferViews"] = b.views
+    while len(b.bin) % 4:
+        b.bin.append(0)
+    doc["buffers"] = [{"byteLength": len(b.bin)}]
+    return doc, bytes(b.bin)
+
+
+def rig_description(rig: Any) -> dict[str, Any]:
+    """How AU values move the joints, for players that drive the skeleton themselves (the
+    studio): each joint's local rotation (rotation vector, rad, world axes at bind) is
+    ``rest[joint] + share[joint] · Σ value·head_rot[AU] + Σ value·body[channel][joint]``;
+    eyes turn by ``Σ value·eye_rot[AU]``; ``head_translate_m[AU]`` moves ``translate_joint``."""
+    sk = rig.skinning
+
+    def r(v: Any) -> list[float]:
+        return [round(float(x), 6) for x in np.asarray(v, float)]
+
+    return {
+        "rest": {k: r(v) for k, v in sk.rest_pose.items()},
+        "head_share": {k: float(v) for k, v in sk.head_share.items()},
+        "head_rot": {c: r(v) for c, v in rig._head_rot.items()},
+        "head_translate_m": {c: r(np.asarray(v) * SCALE) for c, v in rig._head_tr.items()},
+        "translate_joint": sk.translate_bone,
+        "eye_rot": {c: r(v) for c, v in rig._eye_rot.items()},
+        "body": {c: {b: r(v) for b, v in bones.items()} for c, bones in sk.body.items()},
+    }
+
+
+def _top4(w: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Joint indices (N, 4) uint16 and weights (N, 4) summing to 1 from a (N, B) matrix: the
+    four largest influences per vertex."""
+    dense = np.asarray(w.todense() if hasattr(w, "todense") else w, np.float64)
+    order = np.argsort(-dense, axis=1)[:, :4]
+    wt = np.take_along_axis(dense, order, axis=1)
+    wt = np.where(wt > 1e-6, wt, 0.0)
+    s = wt.sum(1, keepdims=True)
+    wt = np.where(s > 0, wt / np.where(s > 0, s, 1), [[1.0, 0, 0, 0]])
+    joints = np.where(wt > 0, order, 0).astype(np.uint16)
+    return joints, wt.astype(np.float32)
+
+
+def _animation(b: _Builder, rig: Any, track: AUTrack, morph_nodes, eye_nodes) -> dict:
+    sk = rig.skinning
+    times = (np.arange(track.n_frames) / track.fps).astype(np.float32)
+    vals = track.values
+    if len(times) == 1:
+        times = np.array([0.0, 1.0 / track.fps], np.float32)
+        vals = np.repeat(vals, 2, axis=0)
+    col = {c: vals[:, j].astype(np.float64) for j, c in enumerate(track.channels)}
+    zero = np.zeros(len(times))
+    t_acc = b.add(times, "SCALAR", _FLOAT, minmax=True)
+    samplers: list[dict] = []
+    channels: list[dict] = []
+
+    def add(node: int, path: str, data: np.ndarray, kind: str) -> None:
+        samplers.append({"input": t_acc, "output": b.add(data.astype(np.float32), kind, _FLOAT),
+                         "interpolation": "LINEAR"})
+        channels.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": path}})
+
+    for node, names in morph_nodes:
+        w = np.stack([col.get(n, zero) for n in names], axis=1)
+        add(node, "weights", w.reshape(-1), "SCALAR")
+    eye_rv, head_rv, head_tr = np.zeros((len(times), 3)), np.zeros((len(times), 3)), \
+        np.zeros((len(times), 3))
+    for c, rv in rig._eye_rot.items():
+        eye_rv += col.get(c, zero)[:, None] * rv[None]
+    for c, rv in rig._head_rot.items():
+        head_rv += col.get(c, zero)[:, None] * rv[None]
+    for c, tr in rig._head_tr.items():
+        head_tr += col.get(c, zero)[:, None] * tr[None]
+    for node, _ in eye_nodes:
+        add(node, "rotation", _quat(eye_rv), "VEC4")
+    body = np.stack([col.get(c, zero) for c in rig.body_channels], 1) if rig.body_channels \
+        else np.zeros((len(times), 0))
+    local = rig.local_rotations(head_rv, body)  # (T, B, 3)
+    for i in range(len(sk.names)):
+        if np.ptp(local[:, i], axis=0).max() > 1e-7:
+            add(i, "rotation", _quat(local[:, i]), "VEC4")
+    if np.any(head_tr):
+        i = sk.names.index(sk.translate_bone)
+        p = sk.parents[i]
+        t0 = (np.asarray(sk.heads[i]) - np.asarray(sk.heads[p])) * SCALE
+        add(i, "translation", t0[None] + head_tr * SCALE, "VEC3")
+    return {"name": "mimika", "samplers": samplers, "channels": channels}

