@@ -141,9 +141,13 @@ def override(**values: float | None) -> Iterator[Limits]:
 
 
 def fmt(v: float) -> str:
-    if abs(v) >= 1e7:
+    """A number for messages: ``36 000``, ``12 801``, ``0.04``, ``1e+09``."""
+    v = float(v)
+    if abs(v) >= 1e9:
         return f"{v:.3g}"
-    return f"{v:,.0f}".replace(",", " ") if float(v).is_integer() else f"{v:.4g}"
+    if abs(v) >= 100 or v.is_integer():
+        return f"{v:,.0f}".replace(",", " ")
+    return f"{v:.4g}"
 
 
 def over(limit: str, text: str, lim: Limits | None = None) -> LimitError:

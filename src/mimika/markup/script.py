@@ -394,9 +394,11 @@ class _Parser:
             pend.p0, p1 = adj(pend.p0), adj(p1)
             try:
                 ch, ev = self._event(pend, p1, timing.times, mood)
-            except ParameterError as e:
-                raise ScriptError(getattr(e, "detail", str(e)), source=self.source,
-                                  line=pend.line, col=pend.col) from None
+            except ParameterError as e:  # an Event's message starts with its place already
+                msg = getattr(e, "detail", str(e))
+                msg = msg.removeprefix(f"{self.source}:{pend.line}:{pend.col}: ")
+                raise ScriptError(msg, source=self.source, line=pend.line,
+                                  col=pend.col) from None
             by_channel.setdefault(ch, []).append(ev)
         speech, by_channel = _merge_texts(speech, by_channel)
         try:

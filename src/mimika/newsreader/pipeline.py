@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import DataError, ParameterError
 from mimika.newsreader.article import Article, parse_article, speak_article
 from mimika.tracks import AUTrack, valid_fps
@@ -264,6 +265,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         raise ParameterError(f"size={w}x{h}: width and height must be even for H.264 video")
     enabled = check_layers(layers)
     fps = valid_fps(fps)
+    if news is None:  # refuse an article too long to say before loading anything
+        limits.check_speech(text if isinstance(text, str) else text.text, rate, "the article")
     tm: dict[str, float] = {}
     t_all = time.perf_counter()
     if rig is None:
