@@ -74,6 +74,7 @@ class AUTrack:
     def constant(cls, aus: Mapping[str, float], *, n_frames: int = 1, fps: float = 25.0):
         """A track holding ``aus`` for ``n_frames`` frames."""
         chans = tuple(aus)
+        check_frames(n_frames, "the constant track")
         vals = np.tile(np.array([aus[c] for c in chans], dtype=np.float32), (n_frames, 1))
         return cls(vals.reshape(n_frames, len(chans)), chans, fps)
 

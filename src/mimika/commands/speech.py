@@ -160,6 +160,7 @@ def register(sub) -> None:
     a.add_argument("--lang", default="en", help="espeak language of the transcript (en)")
     a.add_argument("-o", "--output", metavar="FILE.json", help="timing JSON to write")
     _outputs(a)
+    limit_options(a, "max_duration")
     a.set_defaults(func=cmd_align)
 
     v = sub.add_parser("voices", help="list espeak-ng voices (and --variants)")
