@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import socket
 import threading
 import time
 
@@ -20,31 +19,16 @@ websockets = pytest.importorskip("websockets")
 EVIL = "attacker.test"
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
+    from conftest import serve_app
     from mimika.studio.app import create_app
 
     d = tmp_path_factory.mktemp("studio-abuse")
     app = create_app(d / "projects", library_path=d / "expressions.json",
                      allowed_hosts=["studio.example.org"])
-    port = _free_port()
-    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
-                                        ws_max_size=app.state.max_body))
-    th = threading.Thread(target=srv.run, daemon=True)
-    th.start()
-    t0 = time.time()
-    while not srv.started:
-        assert time.time() - t0 < 30, "studio server did not start"
-        time.sleep(0.05)
-    yield {"base": f"http://127.0.0.1:{port}", "port": port, "app": app}
-    srv.should_exit = True
-    th.join(10)
+    with serve_app(app) as port:
+        yield {"base": f"http://127.0.0.1:{port}", "port": port, "app": app}
 
 
 @pytest.fixture(scope="module")

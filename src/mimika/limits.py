@@ -24,8 +24,10 @@ from typing import Any
 
 from mimika.errors import DataError, ParameterError
 
-__all__ = ["DEFAULTS", "LimitError", "Limits", "check_frames", "check_json_tree",
-           "check_speech", "check_text", "check_timeline", "current", "loads_json", "override"]
+__all__ = ["DEFAULTS", "OPTIONS", "LimitError", "Limits", "check_count", "check_duration",
+           "check_fps", "check_frames", "check_json_tree", "check_speech", "check_text",
+           "check_timeline", "current", "fmt", "loads_json", "over", "override",
+           "speech_seconds"]
 
 
 @dataclass(frozen=True)
@@ -316,7 +318,7 @@ def loads_json(text: str | bytes, source: str = "<json>", *, check: bool = True)
 
     if isinstance(text, bytes | bytearray):
         try:
-            text = bytes(text).decode("utf-8")
+            text = bytes(text).decode("utf-8-sig")
         except UnicodeDecodeError as e:
             raise DataError(f"{source}: not UTF-8 text (byte {e.start})") from None
     try:

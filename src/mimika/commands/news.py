@@ -25,7 +25,7 @@ def _read_article(args: argparse.Namespace) -> tuple[str, str]:
                              "not both or neither")
     if args.example is not None:
         return example_bulletin(args.example), f"example bulletin ({args.example})"
-    from mimika.limits import check_text, current
+    from mimika.limits import check_text, current, over
 
     if args.article == "-":
         text = sys.stdin.read(current().max_text + 1)
@@ -33,7 +33,9 @@ def _read_article(args: argparse.Namespace) -> tuple[str, str]:
         return text, "<stdin>"
     p = Path(args.article)
     try:
-        check_text(p.stat().st_size // 4, f"article {str(p)!r}")  # ≥ 1 character per 4 bytes
+        size = p.stat().st_size  # not read into memory when surely too long
+        if size > 4 * current().max_text:
+            raise over("max_text", f"article {str(p)!r} has at least {size // 4} characters")
         return p.read_text("utf-8"), str(p)
     except FileNotFoundError:
         raise DataError(f"article {str(p)!r} does not exist") from None

@@ -174,9 +174,12 @@ class VideoWriter:
         assert self._q is not None
         if abort and self._err is None:
             self._err = RenderError("the video was abandoned")
-        while self._thread.is_alive():
-            with contextlib.suppress(queue.Full):
-                self._q.put(_STOP, timeout=0.1)
+        sent = False
+        while self._thread.is_alive():  # polling: SIGTERM can arrive meanwhile
+            if not sent:
+                with contextlib.suppress(queue.Full):
+                    self._q.put(_STOP, timeout=0.1)
+                    sent = True
             self._thread.join(0.1)
 
     def close(self) -> Path:
