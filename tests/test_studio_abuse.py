@@ -127,12 +127,12 @@ def test_an_infinite_intensity_is_refused(http):
                                                      (1e7, 120, "max_duration"),
                                                      (3000, 120, "max_frames")])
 def test_exports_past_the_limits_are_refused_before_any_work(http, start, fps, limit):
-    t0 = time.perf_counter()
     ev = [{"kind": "expression", "start": start, "duration": 1.0, "name": "happiness"}]
-    r = http.post("/api/export/csv", json={"project": project(ev), "fps": fps, "speech": False})
-    msg = error_of(r, 400, 422)
+    r = http.post("/api/export/csv?job=far", json={"project": project(ev), "fps": fps,
+                                                   "speech": False})
+    msg = error_of(r, 400, 422)  # (232 s and 3.1 GB, then a dropped connection, before)
     assert limit in msg and "raise it with" in msg
-    assert time.perf_counter() - t0 < 10  # refused, not computed (232 s and 3.1 GB before)
+    assert http.get("/api/export/jobs").json() == {"jobs": []}  # no job was started
 
 
 def test_an_export_within_the_limits_is_complete(http):
@@ -175,15 +175,14 @@ def test_a_long_export_can_be_cancelled_and_does_not_stall_short_ones(server, ht
     th = threading.Thread(target=lambda: out.setdefault("r", _long_mp4(http, "long1")))
     th.start()
     _wait_for_job(http, "long1", present=True)
-    t0 = time.perf_counter()  # a short export while the long one renders
     r = http.post("/api/export/csv", json={"project": project(), "fps": 30})
-    short_s = time.perf_counter() - t0
-    assert r.status_code == 200
+    assert r.status_code == 200  # a short export while the long one renders …
+    jobs = http.get("/api/export/jobs").json()["jobs"]
+    assert [j["id"] for j in jobs] == ["long1"]  # … did not wait for it to end
     assert http.delete("/api/export/jobs/long1").json() == {"cancelled": "long1"}
     th.join(30)
     assert "cancelled" in error_of(out["r"], 409)
     _wait_for_job(http, "long1", present=False, within=30)  # the work stopped, too
-    assert short_s < 30, f"a short export waited {short_s:.1f} s behind a long one"
     assert http.delete("/api/export/jobs/long1").status_code == 404
 
 
