@@ -355,3 +355,20 @@ def test_character_glb_imports_in_blender(character_glb):
     skin = rep.object("skin")
     assert {"AU12", "AU45"} <= set(skin["shape_keys"]) and len(skin["vertex_groups"]) == 18
     assert rep.object("clothes")["type"] == "MESH" and len(rep["images"]) >= 3
+
+
+def test_lips_close_on_p_b_m_and_open_on_vowels(character):
+    from mimika.speech import mouth_track, synthesize
+
+    head, rig = character
+    tr = mouth_track(synthesize("Bob met a big puppy by the pub.", lang="en"), fps=25)
+    chans = [c for c in tr.channels if c in rig.supported]
+    pos = rig.deform_batch(tr.values[:, [tr.channels.index(c) for c in chans]], chans)
+    inner = pos["skin"][:, head.landmarks[[62, 66]]]
+    gap = inner[:, 0, 1] - inner[:, 1, 1]  # upper inner lip above the lower one, cm
+    rest = head.landmark_points()
+    closed = rest[62, 1] - rest[66, 1]  # the neutral mouth is closed
+    apexes = [round(0.5 * (s + e) * 25) for s, e, _ in tr.meta["bilabial"]]
+    assert len(apexes) >= 6
+    assert all(gap[i] < closed + 0.05 for i in apexes if i < len(gap))
+    assert gap.max() > closed + 0.5

@@ -126,7 +126,7 @@ def _slug(text: str) -> str:
 def _head_tags(heads: tuple[str, ...]) -> dict[str, str]:
     tags: dict[str, str] = {}
     for h in heads:
-        tag = h if h in ("builtin", "ict") else _slug(Path(h).stem if h.endswith(".obj")
+        tag = h if h in ("builtin", "ict") else _slug(Path(h).stem if Path(h).suffix
                                                         else Path(h).name)
         base, n = tag, 2
         while tag in tags.values():

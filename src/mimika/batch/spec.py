@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from mimika.errors import DataError, MimikaError
+from mimika.face.heads import DEFAULT_HEAD
 from mimika.facs.catalogue import SEED_AUS, parse_au, parse_intensity
 
 log = logging.getLogger(__name__)
@@ -90,7 +91,7 @@ class BatchSpec:
     intensities: tuple[float, ...] = (1.0,)
     neutral: bool = False
     sample: SampleSpec | None = None
-    heads: tuple[str, ...] = ("builtin",)
+    heads: tuple[str, ...] = (DEFAULT_HEAD,)
     identities: tuple[Identity, ...] = (None,)
     views: tuple[str, ...] = ("front",)
     size: tuple[int, int] = (320, 240)
@@ -249,14 +250,16 @@ def _au_set(c: _Checker, v: Any, path: Path_) -> tuple[tuple[str, float], ...]:
 
 
 def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
+    from mimika.face.makehuman.character_file import preset_names
+
     out = []
     for i, h in enumerate(c.seq(v, ("heads",))):
         p = ("heads", i)
         if not isinstance(h, str) or not h.strip():
-            raise c.error(p, f"{_show(h)} is not a head (use builtin, ict, an ICT-FaceKit folder "
-                             "or an .obj file)")
+            raise c.error(p, f"{_show(h)} is not a head (use a character, builtin, ict, an "
+                             "ICT-FaceKit folder or an .obj file)")
         h = h.strip()
-        if h == "builtin":
+        if h == "builtin" or h in preset_names():
             out.append(h)
             continue
         if h == "ict":
@@ -271,15 +274,17 @@ def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
         path = Path(os.path.expanduser(h))
         if not path.is_absolute() and base is not None:
             path = base / path
-        if path.is_dir() or path.suffix.lower() == ".obj":
+        if path.is_dir() or path.suffix.lower() in (".obj", ".glb", ".gltf", ".vrm", ".yaml",
+                                                     ".yml", ".json"):
             if not path.exists():
                 raise c.error(p, f"head file {str(path)!r} does not exist")
             out.append(str(path.resolve()))
             continue
-        close = difflib.get_close_matches(h, ["builtin", "ict"], n=1)
+        close = difflib.get_close_matches(h, ["builtin", "ict", *preset_names()], n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise c.error(p, f"unknown head {h!r}{hint} (use builtin, ict, an ICT-FaceKit folder "
-                         "or an .obj file; run 'mimika heads')")
+        raise c.error(p, f"unknown head {h!r}{hint} (use a character such as "
+                         f"{preset_names()[0]} or a .yaml file, builtin, ict, an ICT-FaceKit "
+                         "folder, a glTF/GLB/VRM avatar or an .obj file; run 'mimika heads')")
     if len(set(out)) != len(out):
         raise c.error(("heads",), "a head is listed twice")
     if not out:
@@ -427,7 +432,7 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
     kw: dict[str, Any] = {}
     if "name" in d:
         kw["name"] = str(d["name"])
-    heads = _heads(c, d.get("heads", ["builtin"]), Path(base) if base is not None else None)
+    heads = _heads(c, d.get("heads", [DEFAULT_HEAD]), Path(base) if base is not None else None)
     kw["heads"] = heads
     kw["identities"] = _identities(c, d.get("identities"), heads)
 

@@ -2,6 +2,6 @@
 
 #: command modules in the order ``mimika --help`` lists them
 MODULES = (
-    "catalogue", "characters", "pose", "knowledge", "speech", "timeline", "fit", "learn", "gan",
-    "studio", "news", "batch",
+    "catalogue", "characters", "pose", "knowledge", "speech", "timeline", "fit", "avatar",
+    "learn", "gan", "studio", "news", "batch",
 )

@@ -45,6 +45,11 @@ def cmd_aus(args: argparse.Namespace) -> int:
 def cmd_heads(args: argparse.Namespace) -> int:
     from mimika.face.heads import list_heads
 
+    if args.inspect:
+        from mimika.commands.avatar import inspect_head
+
+        return inspect_head(args.inspect)
+
     for h in list_heads():
         mark = "available" if h.available else "missing"
         print(f"{h.name:<8} {h.rig:<13} {mark:<10} {h.description}")
@@ -58,4 +63,6 @@ def register(sub) -> None:
     a.set_defaults(func=cmd_aus)
 
     h = sub.add_parser("heads", help="list the heads mimika can animate")
+    h.add_argument("--inspect", metavar="FILE", help="a character file (.glb, .gltf, .vrm): "
+                   "which AUs its morphs cover and how, which come from fields")
     h.set_defaults(func=cmd_heads)

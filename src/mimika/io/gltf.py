@@ -54,7 +54,7 @@ from mimika.tracks import AUTrack
 
 log = logging.getLogger(__name__)
 
-__all__ = ["build_gltf", "rig_motion", "timing_extras", "write_gltf"]
+__all__ = ["build_gltf", "rig_motion", "save_gltf", "timing_extras", "write_gltf"]
 
 _FLOAT, _UINT, _USHORT = 5126, 5125, 5123
 _ARRAY, _ELEMENTS = 34962, 34963
@@ -398,6 +398,15 @@ def write_gltf(path: str | os.PathLike, rig: Rig, track: AUTrack | None = None) 
     if ext not in (".glb", ".gltf"):
         raise ParameterError(f"glTF output {str(p)!r} must end in .glb or .gltf")
     doc, binary = build_gltf(rig, track, name=p.stem)
+    return save_gltf(p, doc, binary)
+
+
+def save_gltf(path: str | os.PathLike, doc: dict, binary: bytes) -> Path:
+    """Write a built glTF document and its buffer to ``path`` (``.glb`` binary, ``.gltf`` with
+    the buffer as a base64 data URI), atomically."""
+    p = Path(path)
+    ext = p.suffix.lower()
+    doc["buffers"][0]["byteLength"] = len(binary)
     if ext == ".gltf":
         doc["buffers"][0]["uri"] = ("data:application/octet-stream;base64," +
                                     base64.b64encode(binary).decode("ascii"))

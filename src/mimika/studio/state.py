@@ -83,7 +83,7 @@ class StudioState:
     Parameters
     ----------
     projects_dir : folder of project JSON files (created if missing)
-    head : ``builtin`` or ``ict``
+    head : ``builtin``, ``ict`` or a glTF/GLB/VRM character file
     library_path : the user expression library (default: the user's library)
     """
 
@@ -92,8 +92,10 @@ class StudioState:
                  speech_cache: int = 32):
         self.projects_dir = Path(projects_dir)
         self.projects_dir.mkdir(parents=True, exist_ok=True)
-        if head not in ("builtin", "ict"):
-            raise DataError(f"studio head {head!r} must be 'builtin' or 'ict'")
+        if head not in ("builtin", "ict") and not (
+                Path(head).suffix.lower() in (".glb", ".gltf", ".vrm") and Path(head).is_file()):
+            raise DataError(f"studio head {head!r} must be 'builtin', 'ict' or a .glb/.gltf/.vrm "
+                            "character file")
         self.head_name = head
         self.library_path = Path(library_path) if library_path is not None else None
         self.controller_path = controller_path

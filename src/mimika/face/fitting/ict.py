@@ -42,6 +42,7 @@ from mimika.face.fitting.splits import eye_split, mouth_split, refine_mouth_spli
 from mimika.face.head import Head
 from mimika.face.rigs.field import (
     FieldRig,
+    FieldSet,
     parse_fields,
 )
 from mimika.facs import AU_CATALOGUE, parse_au
@@ -161,6 +162,132 @@ def _shape_is_sided(spec: Mapping, shape_names: Sequence[str]) -> bool:
     return any(f"{n}_L" in names or n[-2:] in ("_L", "_R") for n in spec.get("shapes", {}))
 
 
+@dataclass
+class _Setup:
+    """What every field fit on the ICT head shares: the fields frame, the split surfaces, the
+    face-category vertices (all objects the face field drives) and the teeth vertices."""
+
+    head: Head
+    doc: dict
+    opt: FitOptions
+    face_names: list[str]
+    rest: np.ndarray
+    off: dict[str, int]
+    in_face: np.ndarray
+    lo: int
+    hi: int
+    upper: dict[str, np.ndarray]
+    teeth_names: list[str]
+    teeth_rest: np.ndarray
+    fit_kw: dict
+    scale: float
+
+
+def _setup(head: Head, jaw_skin: np.ndarray, opt: FitOptions, what: str) -> _Setup:
+    """Frame (landmark centroid and rms radius), mouth split refined on the jaw-open skin
+    positions ``jaw_skin``, eye split (rich), and the vertex sets of the ICT ``head``."""
+    lm = head.landmark_points().astype(float)
+    origin = lm.mean(0)
+    scale = float(np.sqrt(((lm - origin) ** 2).sum(1).mean()))
+    jaw = jaw_skin[FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
+    face_v = head["skin"].vertices[FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
+    normal, offsets, _ = refine_mouth_split(lm, face_v, jaw - face_v)
+    split = mouth_split(lm, normal, offsets)
+    doc: dict = {
+        "format": "mimika-fields", "version": 1, "head": "ict",
+        "description": f"Fitted to the ICT Face Model Light shapes by 'mimika fit' "
+                       f"(family {opt.family}, seed 002 Eq 4.8/4.9{what}).",
+        "frame": {"origin": np.round(origin, 6).tolist(), "scale": round(scale, 6)},
+        "splits": {"mouth": split},
+        "source": {"head": "ict", "landmarks": np.round(lm, 5).tolist(),
+                   "mouth_split": {"normal": np.round(normal, 8).tolist(),
+                                   "offsets": np.round(offsets, 6).tolist()},
+                   "fit": {"family": opt.family, "seed": opt.seed}},
+        "aus": {},
+    }
+    if opt.lid_split:
+        doc["splits"]["eyes"] = eye_split(lm)
+    probe = parse_fields({**doc, "aus": {}})
+    # every face-category object is driven by the face field: fit on all of them (skin,
+    # mouth socket, eye sockets, lashes), measure on the ICT face range of the skin only
+    face_names = [o.name for o in head.objects if o.category == "face"]
+    rest = np.concatenate([head[n].vertices for n in face_names]).astype(float)
+    off = {n: int(o) for n, o in zip(face_names, np.cumsum(
+        [0] + [head[n].n_vertices for n in face_names]), strict=False)}
+    lo, hi = off["skin"] + FACE_RANGE[0], off["skin"] + FACE_RANGE[1]
+    in_face = np.zeros(len(rest), bool)
+    in_face[lo:hi] = True
+    upper = {name: sp.upper_weight(rest) for name, sp in probe.splits.items()}
+    teeth_names = [o.name for o in head.objects if o.category == "teeth"]
+    teeth_rest = np.concatenate([head[n].vertices for n in teeth_names]).astype(float)
+    fit_kw = dict(family=opt.family, sigma_min=opt.sigma_min_cm / scale,
+                  psi_evals=opt.psi_evals, phi_evals=opt.phi_evals,
+                  rbf_centers=opt.rbf_centers, rbf_ridge=opt.rbf_ridge)
+    return _Setup(head, doc, opt, face_names, rest, off, in_face, lo, hi, upper, teeth_names,
+                  teeth_rest, fit_kw, scale)
+
+
+def _fit_objects(st: _Setup, pos: Mapping[str, np.ndarray], rng: np.random.Generator,
+                 split: str | None, bilateral: bool, key: str, heldout: dict, measured: dict
+                 ) -> tuple[dict, int]:
+    """Fit the face (and lower-teeth) fields of one displacement ``pos`` (positions per object
+    at full intensity); records held-out skin vertices and measurements under ``key``.
+    Returns the ``objects`` spec of the fields file and the number of moving face vertices."""
+    opt, rest, head = st.opt, st.rest, st.head
+    to_u = parse_fields({**st.doc, "aus": {}}).to_u
+    disp = np.concatenate([pos[n] for n in st.face_names]).astype(float) - rest
+    measured[key] = disp[st.off["skin"]:st.off["skin"] + head["skin"].n_vertices]
+    mag = np.linalg.norm(disp, axis=1)
+    thr = max(opt.moving_min_cm, opt.moving_fraction * float(mag[st.lo:st.hi].max()))
+    moves = mag >= thr
+    mov = np.flatnonzero(moves & st.in_face)
+    perm = rng.permutation(mov)
+    n_test = round(opt.holdout * len(perm))
+    heldout[key] = np.sort(perm[:n_test]) - st.off["skin"]
+    train = np.sort(np.r_[perm[n_test:], np.flatnonzero(moves & ~st.in_face)])
+    # still vertices near the motion (target 0)
+    box_lo, box_hi = rest[mov].min(0) - 1.5, rest[mov].max(0) + 1.5
+    still = np.flatnonzero(~moves & np.all((rest >= box_lo) & (rest <= box_hi), axis=1))
+    still = rng.permutation(still)[:opt.still_vertices]
+    if split is None:
+        halves: tuple = ((None, np.ones(len(rest), bool)),)
+    else:
+        halves = (("upper", st.upper[split] > 0.0), ("lower", st.upper[split] < 1.0))
+    face_spec: dict = {}
+    for half, sel in halves:
+        tr = train[sel[train]]
+        tr = rng.permutation(tr)[:opt.max_vertices] if len(tr) > opt.max_vertices else tr
+        sti = still[sel[still]]
+        if len(tr) < 8:
+            log.info("%s %s: only %d moving vertices; no field", key, half, len(tr))
+            continue
+        idx = np.r_[tr, sti]
+        moving = np.r_[np.ones(len(tr), bool), np.zeros(len(sti), bool)]
+        f = fit_field(to_u(rest[idx]), disp[idx] / st.scale, moving,
+                      bilateral=bilateral, **st.fit_kw)
+        if half is None:
+            face_spec = f.to_json()
+        else:
+            face_spec[half] = f.to_json()
+    if split is not None and face_spec and split != "mouth":
+        face_spec["split"] = split
+    objects = {"face": face_spec} if face_spec else {}
+    # teeth: the lower teeth, gums and tongue follow the jaw (seed: AU26/27 move teeth)
+    tpos = np.concatenate([pos[n] for n in st.teeth_names]).astype(float)
+    tdisp = tpos - st.teeth_rest
+    tmag = np.linalg.norm(tdisp, axis=1)
+    if tmag.max() > 0.05:
+        tmov = np.flatnonzero(tmag >= max(opt.moving_min_cm, opt.moving_fraction *
+                                          tmag.max()))
+        tsel = rng.permutation(tmov)[:opt.max_vertices]
+        f = fit_field(to_u(st.teeth_rest[tsel]), tdisp[tsel] / st.scale, None,
+                      bilateral=False, **st.fit_kw)
+        objects["teeth"] = {"lower": f.to_json()}
+        heldout[key + ":teeth"] = tmov
+        measured[key + ":teeth"] = tdisp
+    return objects, len(mov)
+
+
 def fit_ict(path: str | None = None, aus: Sequence[str] | None = None,
             options: FitOptions | None = None, progress: Progress | None = None) -> FitResult:
     """Fit fields to the ICT Face Model's shapes (folder ``path`` or ``$MIMIKA_ICT_DIR``).
@@ -188,44 +315,8 @@ def fit_ict(path: str | None = None, aus: Sequence[str] | None = None,
                                      f"{', '.join(avail)}")
             if c not in codes:
                 codes.append(c)
-    lm = head.landmark_points().astype(float)
-    origin = lm.mean(0)
-    scale = float(np.sqrt(((lm - origin) ** 2).sum(1).mean()))
-    jaw = rig.deform({"AU27": 1.0})["skin"][FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
-    face_v = head["skin"].vertices[FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
-    normal, offsets, _ = refine_mouth_split(lm, face_v, jaw - face_v)
-    split = mouth_split(lm, normal, offsets)
-    doc: dict = {
-        "format": "mimika-fields", "version": 1, "head": "ict",
-        "description": f"Fitted to the ICT Face Model Light shapes by 'mimika fit' "
-                       f"(family {opt.family}, seed 002 Eq 4.8/4.9).",
-        "frame": {"origin": np.round(origin, 6).tolist(), "scale": round(scale, 6)},
-        "splits": {"mouth": split},
-        "source": {"head": "ict", "landmarks": np.round(lm, 5).tolist(),
-                   "mouth_split": {"normal": np.round(normal, 8).tolist(),
-                                   "offsets": np.round(offsets, 6).tolist()},
-                   "fit": {"family": opt.family, "seed": opt.seed}},
-        "aus": {},
-    }
-    if opt.lid_split:
-        doc["splits"]["eyes"] = eye_split(lm)
-    probe = parse_fields({**doc, "aus": {}})
-    # every face-category object is driven by the face field: fit on all of them (skin,
-    # mouth socket, eye sockets, lashes), measure on the ICT face range of the skin only
-    face_names = [o.name for o in head.objects if o.category == "face"]
-    rest = np.concatenate([head[n].vertices for n in face_names]).astype(float)
-    off = {n: int(o) for n, o in zip(face_names, np.cumsum(
-        [0] + [head[n].n_vertices for n in face_names]), strict=False)}
-    lo, hi = off["skin"] + FACE_RANGE[0], off["skin"] + FACE_RANGE[1]
-    in_face = np.zeros(len(rest), bool)
-    in_face[lo:hi] = True
-    upper = {name: sp.upper_weight(rest) for name, sp in probe.splits.items()}
-    teeth_names = [o.name for o in head.objects if o.category == "teeth"]
-    teeth_rest = np.concatenate([head[n].vertices for n in teeth_names]).astype(float)
-    to_u = probe.to_u
-    s_min = opt.sigma_min_cm / scale
-    fit_kw = dict(family=opt.family, sigma_min=s_min, psi_evals=opt.psi_evals,
-                  phi_evals=opt.phi_evals, rbf_centers=opt.rbf_centers, rbf_ridge=opt.rbf_ridge)
+    st = _setup(head, rig.deform({"AU27": 1.0})["skin"], opt, "")
+    doc = st.doc
     heldout: dict[str, np.ndarray] = {}
     measured: dict[str, np.ndarray] = {}
     times: dict[str, float] = {}
@@ -234,77 +325,30 @@ def fit_ict(path: str | None = None, aus: Sequence[str] | None = None,
         rng = np.random.default_rng([opt.seed, int(code[2:4])])
         spec = table["aus"][code]
         pose = {code + "L": 1.0, code + "R": 1.0} if AU_CATALOGUE[code].sided else {code: 1.0}
-        pos = rig.deform(pose)
-        disp = np.concatenate([pos[n] for n in face_names]).astype(float) - rest
-        measured[code] = disp[off["skin"]:off["skin"] + head["skin"].n_vertices]
-        mag = np.linalg.norm(disp, axis=1)
-        thr = max(opt.moving_min_cm, opt.moving_fraction * float(mag[lo:hi].max()))
-        moves = mag >= thr
-        mov = np.flatnonzero(moves & in_face)
-        perm = rng.permutation(mov)
-        n_test = round(opt.holdout * len(perm))
-        heldout[code] = np.sort(perm[:n_test]) - off["skin"]
-        train = np.sort(np.r_[perm[n_test:], np.flatnonzero(moves & ~in_face)])
-        # still vertices near the motion (target 0)
-        box_lo, box_hi = rest[mov].min(0) - 1.5, rest[mov].max(0) + 1.5
-        still = np.flatnonzero(~moves & np.all((rest >= box_lo) & (rest <= box_hi), axis=1))
-        still = rng.permutation(still)[:opt.still_vertices]
         bilateral = _shape_is_sided(spec, shapes.names)
         split = "mouth" if code in SUB_OBJECT or (opt.lid_split and code in JAW_AUS) \
             else "eyes" if (opt.lid_split and code in LID_AUS) else None
-        if split is None:
-            halves: tuple = ((None, np.ones(len(rest), bool)),)
-        else:
-            halves = (("upper", upper[split] > 0.0), ("lower", upper[split] < 1.0))
-        face_spec: dict = {}
-        for half, sel in halves:
-            tr = train[sel[train]]
-            tr = rng.permutation(tr)[:opt.max_vertices] if len(tr) > opt.max_vertices else tr
-            st = still[sel[still]]
-            if len(tr) < 8:
-                log.info("%s %s: only %d moving vertices; no field", code, half, len(tr))
-                continue
-            idx = np.r_[tr, st]
-            moving = np.r_[np.ones(len(tr), bool), np.zeros(len(st), bool)]
-            f = fit_field(to_u(rest[idx]), disp[idx] / scale, moving,
-                          bilateral=bilateral, **fit_kw)
-            if half is None:
-                face_spec = f.to_json()
-            else:
-                face_spec[half] = f.to_json()
-        if split is not None and face_spec and split != "mouth":
-            face_spec["split"] = split
-        objects = {"face": face_spec} if face_spec else {}
-        # teeth: the lower teeth, gums and tongue follow the jaw (seed: AU26/27 move teeth)
-        tpos = np.concatenate([pos[n] for n in teeth_names]).astype(float)
-        tdisp = tpos - teeth_rest
-        tmag = np.linalg.norm(tdisp, axis=1)
-        if tmag.max() > 0.05:
-            tmov = np.flatnonzero(tmag >= max(opt.moving_min_cm, opt.moving_fraction *
-                                              tmag.max()))
-            tsel = rng.permutation(tmov)[:opt.max_vertices]
-            f = fit_field(to_u(teeth_rest[tsel]), tdisp[tsel] / scale, None,
-                          bilateral=False, **fit_kw)
-            objects["teeth"] = {"lower": f.to_json()}
-            heldout[code + ":teeth"] = tmov
-            measured[code + ":teeth"] = tdisp
+        objects, n_mov = _fit_objects(st, rig.deform(pose), rng, split, bilateral, code,
+                                      heldout, measured)
         if objects:
             doc["aus"][code] = {"kind": "linear", "objects": objects}
         times[code] = time.perf_counter() - t0
-        log.info("fitted %s in %.2f s (%d moving face vertices)", code, times[code], len(mov))
+        log.info("fitted %s in %.2f s (%d moving face vertices)", code, times[code], n_mov)
         if progress:
             progress(k + 1, len(codes))
     doc["aus"].update(_rotation_specs(table, head))
     doc["aus"] = {c: doc["aus"][c] for c in AU_CATALOGUE if c in doc["aus"]}
-    accuracy = _accuracy(doc, head, codes, measured, heldout, teeth_names, times)
+    accuracy = accuracy_rows(parse_fields(doc, source="<fit>"), head, codes, measured, heldout,
+                             st.teeth_names, times)
     return FitResult(doc, accuracy, opt.family, time.perf_counter() - t_start)
 
 
-def _accuracy(doc: dict, head: Head, codes: Sequence[str], measured: Mapping[str, np.ndarray],
-              heldout: Mapping[str, np.ndarray], teeth_names: Sequence[str],
-              times: Mapping[str, float]) -> list[AuAccuracy]:
-    """Table 4.3 rows through a FieldRig built from ``doc`` (the file as written)."""
-    rig = FieldRig(head, parse_fields(doc, source="<fit>"))
+def accuracy_rows(fields: FieldSet, head: Head, codes: Sequence[str],
+                  measured: Mapping[str, np.ndarray], heldout: Mapping[str, np.ndarray],
+                  teeth_names: Sequence[str], times: Mapping[str, float]) -> list[AuAccuracy]:
+    """Table 4.3 rows through a FieldRig built from ``fields`` (the file as written); ``codes``
+    are keys of ``fields.linear`` (AUs, or shape names for shape fields)."""
+    rig = FieldRig(head, fields)
     rows = []
     for code in codes:
         if code not in rig.fields.linear:

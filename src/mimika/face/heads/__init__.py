@@ -1,5 +1,6 @@
 """The heads mimika can animate, by name or path: a character preset (the default, see
-``mimika characters``) or character file, ``builtin``, ``ict``, an ICT folder, an OBJ."""
+``mimika characters``) or character file, ``builtin``, ``ict``, an ICT folder, a glTF / GLB / VRM
+character, an OBJ."""
 
 from __future__ import annotations
 
@@ -76,8 +77,10 @@ def load_head(spec: str | os.PathLike = DEFAULT_HEAD, *, fields: str | Path | No
     ``ict`` — the ICT Face Model from ``MIMIKA_ICT_DIR`` with its BlendshapeRig; a directory —
     an ICT-FaceKit checkout; an ``.obj`` file — a face mesh in mimika's frame (cm, y up,
     facing +z) driven by the built-in fields (AUs are fields over space, so any similar face
-    mesh deforms). ``identity`` (ICT heads only): an identity mode 0–9 or a sequence of mode
-    weights (see :func:`mimika.face.heads.ict.identity_weights`).
+    mesh deforms); a ``.glb``/``.gltf``/``.vrm`` file — any character, its morphs mapped to AUs
+    and the rest from fields (:mod:`mimika.face.heads.gltf`). ``identity`` (ICT heads only):
+    an identity mode 0–9 or a sequence of mode weights (see
+    :func:`mimika.face.heads.ict.identity_weights`).
     """
     s = str(spec)
     from mimika.face.makehuman.character_file import is_character_spec
@@ -107,6 +110,12 @@ def load_head(spec: str | os.PathLike = DEFAULT_HEAD, *, fields: str | Path | No
         rig = load_ict_rig(None if s == "ict" else s, identity)
         return rig.head, rig
     p = Path(s)
+    if p.suffix.lower() in (".glb", ".gltf", ".vrm"):
+        if fields is not None:
+            raise ParameterError("--fields applies to field-rigged heads, not a glTF character")
+        from mimika.face.heads.gltf import load_gltf_head
+
+        return load_gltf_head(p)
     if p.suffix.lower() == ".obj":
         if not p.is_file():
             raise DataError(f"mesh file {p} does not exist")
@@ -116,7 +125,8 @@ def load_head(spec: str | os.PathLike = DEFAULT_HEAD, *, fields: str | Path | No
         return head, _field_rig(head, fields)
     raise DataError(
         f"unknown head {s!r}: use a character ({', '.join(_presets())} or a .yaml file), "
-        "'builtin', 'ict', an ICT-FaceKit folder or an .obj file (run 'mimika heads')"
+        "'builtin', 'ict', an ICT-FaceKit folder, a glTF/GLB/VRM character or an .obj file "
+        "(run 'mimika heads')"
     )
 
 

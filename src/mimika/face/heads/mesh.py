@@ -31,7 +31,8 @@ def head_from_obj(path: str | Path) -> Head:
         raise DataError(
             f"{path}: the mesh (bounds {np.round(lo, 1).tolist()} … {np.round(hi, 1).tolist()}) "
             "is not in mimika's head frame: centimetres, y up, face toward +z, centred like "
-            "the built-in head (run 'mimika heads')"
+            f"the built-in head; or rig it: 'mimika rig {path} -o face.glb', then "
+            "--head face.glb (any size, orientation and unit)"
         )
     _, lm = cKDTree(mesh.vertices).query(ref.landmark_points())
     skin = MeshObject("skin", "face", mesh.vertices, (Part("skin", mesh.faces),),

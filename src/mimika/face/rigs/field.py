@@ -139,8 +139,9 @@ class Rbf:
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Residual displacements at points ``u`` (N, 3), shape (N, 3)."""
-        d2 = ((u[:, None, :] - self.centers[None]) ** 2).sum(-1)
-        return np.exp(-0.5 * d2 / self.sigma**2) @ self.weights
+        c = self.centers
+        d2 = (u * u).sum(1)[:, None] + (c * c).sum(1)[None, :] - 2.0 * (u @ c.T)
+        return np.exp(-0.5 * np.maximum(d2, 0.0) / self.sigma**2) @ self.weights
 
 
 def direction(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:

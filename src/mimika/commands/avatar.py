@@ -1,0 +1,70 @@
+"""``mimika rig`` (give a face mesh FACS and ARKit blendshapes) and ``mimika heads --inspect``
+(what a character's morphs cover)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from mimika.errors import ParameterError
+
+
+def cmd_rig(args: argparse.Namespace) -> int:
+    from mimika.face.rigging.autorig import rig_mesh
+    from mimika.face.rigging.export import arkit_shapes, write_rigged
+
+    out = Path(args.output)
+    if out.suffix.lower() not in (".glb", ".gltf"):
+        raise ParameterError(f"output {str(out)!r} must end in .glb or .gltf")
+    r = rig_mesh(args.mesh, landmarks=args.landmarks)
+    path, arkit = write_rigged(out, r.rig, arkit_shapes(r.shapes))
+    head = r.head
+    aus = [c for c in r.rig.supported if len(c) == 4]
+    if not args.quiet:
+        print(f"face: {r.frame.describe()}")
+        print("objects: " + ", ".join(f"{o.name} ({o.category}, {o.n_vertices} vertices)"
+                                      for o in head.objects))
+        print(f"wrote {path}: {len(aus)} AUs ({len([c for c in r.rig.supported if len(c) > 4])}"
+              f" one-sided), {len(arkit)} ARKit shapes in {sum(r.seconds.values()):.1f} s")
+        missing = [a for a in ("tongueOut",) if a not in arkit]
+        if missing:
+            print(f"not generated: {', '.join(missing)} (no fitted field: the ICT scans have no "
+                  "tongue shape)")
+    return 0
+
+
+def inspect_head(path: str) -> int:
+    from mimika.face.heads import load_head
+
+    head, rig = load_head(path)
+    print(f"{path}: {len(head.objects)} objects: " + ", ".join(
+        f"{o.name} ({o.category})" for o in head.objects))
+    print(f"frame: {head.meta.get('frame', '')}")
+    if head.meta.get("head_bone"):
+        print(f"head AUs follow the skin's bone {head.meta['head_bone']!r}")
+    cover = head.meta.get("coverage", {})
+    counts: dict[str, int] = {}
+    print(f"\n{'AU':<6}{'source':<10}how")
+    for code in (c for c in rig.supported if len(c) == 4):
+        src, how = cover.get(code, ("?", ""))
+        counts[src] = counts.get(src, 0) + 1
+        print(f"{code:<6}{src:<10}{how}")
+    print("\n" + ", ".join(f"{n} {k}" for k, n in counts.items()))
+    rows = head.meta.get("morphs", [])
+    if rows:
+        print(f"\n{'mesh':<20}{'morph':<28}{'kind':<11}{'as':<18}rule")
+        for r in rows:
+            print(f"{r['mesh'][:19]:<20}{r['morph'][:27]:<28}{r['kind']:<11}{r['as']:<18}"
+                  f"{r['how']}")
+    return 0
+
+
+def register(sub) -> None:
+    r = sub.add_parser("rig", help="give a face mesh (OBJ, glTF, VRM) FACS AU and ARKit-52 "
+                       "blendshapes, written as GLB")
+    r.add_argument("mesh", help="the mesh: .obj, .glb, .gltf or .vrm")
+    r.add_argument("-o", "--output", required=True, help="the rigged .glb (or .gltf)")
+    r.add_argument("--landmarks", help="JSON with eye_L, eye_R and mouth [x, y, z] in the "
+                   "mesh's coordinates, for faces whose eyes and mouth are not found")
+    r.add_argument("-q", "--quiet", action="store_true", help="print nothing")
+    r.set_defaults(func=cmd_rig)

@@ -1,0 +1,396 @@
+"""Read a glTF 2.0 / GLB / VRM file into plain arrays (pygltflib does the parsing).
+
+Every mesh node of the default scene becomes a :class:`SceneMesh` in the file's units and
+axes, at its rest pose: node transforms applied, skinned meshes placed by their joints
+(linear-blend skinning with the bind matrices, so a bind pose that differs from the rest
+pose is honoured), morph target deltas mapped by the same linear part. Materials keep their
+base colour, base-colour / normal textures (decoded to uint8 arrays) and alpha mode. VRM
+0.x (``VRM``) and 1.0 (``VRMC_vrm``) humanoid bones and expression presets are read too.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mimika.errors import DataError
+
+log = logging.getLogger(__name__)
+
+__all__ = ["GltfScene", "SceneMaterial", "SceneMesh", "read_gltf"]
+
+_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
+           5126: np.float32}
+_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+_NORM = {np.int8: 127.0, np.uint8: 255.0, np.int16: 32767.0, np.uint16: 65535.0}
+
+
+@dataclass
+class SceneMaterial:
+    """A glTF material: linear RGBA factor, optional sRGB base-colour and normal images
+    ((H, W, C) uint8, row 0 = top), alpha mode (OPAQUE | MASK | BLEND) and cutoff."""
+
+    name: str
+    base_color: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    base_color_image: np.ndarray | None = None
+    normal_image: np.ndarray | None = None
+    alpha_mode: str = "OPAQUE"
+    alpha_cutoff: float = 0.5
+    double_sided: bool = False
+
+
+@dataclass
+class SceneMesh:
+    """One mesh node: positions (N, 3), triangles per primitive with a material index,
+    UVs (N, 2) or None, morph targets (names, deltas (M, N, 3)), and skin joints/weights."""
+
+    name: str
+    node: int
+    vertices: np.ndarray
+    primitives: list[tuple[int, np.ndarray]]
+    uvs: np.ndarray | None = None
+    morph_names: list[str] = field(default_factory=list)
+    morph_deltas: np.ndarray | None = None
+    joints: np.ndarray | None = None  #: (N, 4) node indices
+    weights: np.ndarray | None = None  #: (N, 4)
+
+
+@dataclass
+class GltfScene:
+    """The meshes, materials, node names and world positions, VRM data of one file."""
+
+    path: Path
+    meshes: list[SceneMesh]
+    materials: list[SceneMaterial]
+    node_names: list[str]
+    node_world: np.ndarray  #: (nodes, 4, 4) rest-pose world matrices
+    node_parent: np.ndarray  #: (nodes,) parent node index or -1
+    vrm_version: int | None = None  #: 0 for VRM 0.x, 1 for VRM 1.0, None otherwise
+    bones: dict[str, int] = field(default_factory=dict)  #: humanoid bone → node (VRM)
+    expressions: dict[str, list[tuple[int, int, float]]] = field(default_factory=dict)
+    #: VRM expression preset → [(mesh index in :attr:`meshes`, morph index, weight 0–1)]
+
+    def node_position(self, node: int) -> np.ndarray:
+        return self.node_world[node, :3, 3].copy()
+
+    def descendants(self, node: int) -> set[int]:
+        """``node`` and every node below it."""
+        out = {node}
+        changed = True
+        while changed:
+            changed = False
+            for i, p in enumerate(self.node_parent):
+                if p in out and i not in out:
+                    out.add(i)
+                    changed = True
+        return out
+
+
+def _trs(node) -> np.ndarray:
+    if node.matrix is not None and len(node.matrix) == 16:
+        return np.asarray(node.matrix, float).reshape(4, 4).T
+    m = np.eye(4)
+    if node.rotation is not None:
+        x, y, z, w = (float(c) for c in node.rotation)
+        m[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    if node.scale is not None:
+        m[:3, :3] = m[:3, :3] * np.asarray(node.scale, float)[None, :]
+    if node.translation is not None:
+        m[:3, 3] = node.translation
+    return m
+
+
+class _Reader:
+    def __init__(self, path: Path) -> None:
+        from pygltflib import GLTF2, BufferFormat
+
+        self.path = path
+        try:
+            with open(path, "rb") as fh:  # .vrm (and misnamed files): decide by the magic
+                binary = fh.read(4) == b"glTF"
+            g = GLTF2().load_binary(str(path)) if binary else GLTF2().load_json(str(path))
+            if g is None:
+                raise ValueError("not a glTF file")
+            if g.buffers:
+                g.convert_buffers(BufferFormat.BINARYBLOB)
+            self.blob = g.binary_blob() or b""
+        except DataError:
+            raise
+        except Exception as e:  # pygltflib raises many kinds on broken input
+            raise DataError(f"{path}: not a readable glTF/GLB file ({type(e).__name__}: "
+                            f"{str(e)[:120]}); export it again from your tool") from None
+        self.g = g
+
+    def accessor(self, idx: int | None) -> np.ndarray:
+        """Accessor ``idx`` as an (count, width) array (normalised integers → float)."""
+        g = self.g
+        try:
+            acc = g.accessors[idx]
+            dt = np.dtype(_DTYPES[acc.componentType])
+            width = _WIDTH[acc.type]
+            out = np.zeros((acc.count, width), dt)
+            if acc.bufferView is not None:
+                bv = g.bufferViews[acc.bufferView]
+                off = (bv.byteOffset or 0) + (acc.byteOffset or 0)
+                stride = bv.byteStride or width * dt.itemsize
+                need = off + stride * (acc.count - 1) + width * dt.itemsize
+                if acc.count and need > len(self.blob):
+                    raise ValueError("runs past the end of its buffer")
+                if acc.count:
+                    out[:] = np.ndarray((acc.count, width), dt, self.blob, off,
+                                        (stride, dt.itemsize))
+            sp = acc.sparse
+            if sp is not None and sp.count:
+                ib = g.bufferViews[sp.indices.bufferView]
+                idt = np.dtype(_DTYPES[sp.indices.componentType])
+                ids = np.frombuffer(self.blob, idt, sp.count,
+                                    (ib.byteOffset or 0) + (sp.indices.byteOffset or 0))
+                vb = g.bufferViews[sp.values.bufferView]
+                vals = np.frombuffer(self.blob, dt, sp.count * width,
+                                     (vb.byteOffset or 0) + (sp.values.byteOffset or 0))
+                out[ids.astype(np.int64)] = vals.reshape(-1, width)
+        except (IndexError, KeyError, TypeError, ValueError, AttributeError) as e:
+            raise DataError(f"{self.path}: accessor {idx} is broken ({e}); export the file "
+                            "again") from None
+        if acc.normalized and dt.type in _NORM:
+            return out.astype(np.float32) / _NORM[dt.type]
+        return out
+
+    def image(self, tex_index: int | None) -> np.ndarray | None:
+        """The decoded image of texture ``tex_index`` ((H, W, C) uint8) or None."""
+        from PIL import Image
+
+        g = self.g
+        if tex_index is None or tex_index >= len(g.textures):
+            return None
+        src = g.textures[tex_index].source
+        if src is None:
+            return None
+        im = g.images[src]
+        try:
+            if im.bufferView is not None:
+                bv = g.bufferViews[im.bufferView]
+                off = bv.byteOffset or 0
+                data = self.blob[off:off + bv.byteLength]
+            elif im.uri and im.uri.startswith("data:"):
+                import base64
+
+                data = base64.b64decode(im.uri.split(",", 1)[1])
+            elif im.uri:
+                data = (self.path.parent / im.uri).read_bytes()
+            else:
+                return None
+            pic = Image.open(io.BytesIO(data))
+            pic = pic.convert("RGBA" if "A" in pic.getbands() else "RGB")
+            return np.asarray(pic, np.uint8)
+        except Exception as e:  # a missing or undecodable image: keep the material colour
+            log.warning("%s: image %d not decoded (%s); using the material colour",
+                        self.path, src, e)
+            return None
+
+
+def _materials(r: _Reader) -> list[SceneMaterial]:
+    out = []
+    for i, m in enumerate(r.g.materials or []):
+        pbr = m.pbrMetallicRoughness
+        col = tuple(float(c) for c in (pbr.baseColorFactor if pbr and pbr.baseColorFactor
+                                       else (1, 1, 1, 1)))
+        bct = pbr.baseColorTexture.index if pbr and pbr.baseColorTexture else None
+        nt = m.normalTexture.index if m.normalTexture else None
+        out.append(SceneMaterial(m.name or f"material{i}", col, r.image(bct), r.image(nt),
+                                 m.alphaMode or "OPAQUE", float(m.alphaCutoff or 0.5),
+                                 bool(m.doubleSided)))
+    return out
+
+
+def _world(g) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """Rest world matrices and parents of all nodes; the nodes of the default scene."""
+    n = len(g.nodes)
+    parent = np.full(n, -1, np.int64)
+    for i, nd in enumerate(g.nodes):
+        for c in nd.children or []:
+            parent[c] = i
+    local = np.stack([_trs(nd) for nd in g.nodes]) if n else np.zeros((0, 4, 4))
+    world = np.zeros_like(local)
+    done = np.zeros(n, bool)
+
+    def solve(i: int, depth: int = 0) -> np.ndarray:
+        if depth > n:
+            raise DataError("the glTF node hierarchy has a cycle")
+        if not done[i]:
+            p = parent[i]
+            world[i] = local[i] if p < 0 else solve(p, depth + 1) @ local[i]
+            done[i] = True
+        return world[i]
+
+    for i in range(n):
+        solve(i)
+    scenes = g.scenes or []
+    if scenes:
+        roots = scenes[g.scene or 0].nodes or []
+        in_scene: list[int] = []
+        stack = list(roots)
+        while stack:
+            i = stack.pop()
+            in_scene.append(i)
+            stack += g.nodes[i].children or []
+    else:
+        in_scene = list(range(n))
+    return world, parent, sorted(in_scene)
+
+
+def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
+    g = r.g
+    node = g.nodes[ni]
+    mesh = g.meshes[node.mesh]
+    verts, uvs, faces, joints, weights = [], [], [], [], []
+    targets: list[list[np.ndarray]] = []
+    seen: dict[int, int] = {}
+    base = 0
+    for prim in mesh.primitives:
+        if prim.mode not in (None, 4):
+            continue  # only triangle lists
+        a = prim.attributes
+        if a.POSITION is None:
+            continue
+        if a.POSITION in seen:  # primitives sharing one vertex array
+            off = seen[a.POSITION]
+        else:
+            off = seen[a.POSITION] = base
+            v = r.accessor(a.POSITION)[:, :3].astype(np.float64)
+            verts.append(v)
+            uvs.append(r.accessor(a.TEXCOORD_0)[:, :2] if a.TEXCOORD_0 is not None else None)
+            joints.append(r.accessor(a.JOINTS_0) if a.JOINTS_0 is not None else None)
+            weights.append(r.accessor(a.WEIGHTS_0) if a.WEIGHTS_0 is not None else None)
+            tl = []
+            for t in prim.targets or []:
+                pi = t.get("POSITION") if isinstance(t, dict) else getattr(t, "POSITION", None)
+                tl.append(r.accessor(pi)[:, :3] if pi is not None else np.zeros_like(v))
+            targets.append(tl)
+            base += len(v)
+        idx = (r.accessor(prim.indices).reshape(-1) if prim.indices is not None
+               else np.arange(len(verts[-1])))
+        if len(idx) % 3:
+            raise DataError(f"{r.path}: mesh {mesh.name!r} has {len(idx)} indices, not a "
+                            "multiple of 3")
+        f = idx.astype(np.int64).reshape(-1, 3) + off
+        if len(f) and (f.max() >= base):
+            raise DataError(f"{r.path}: mesh {mesh.name!r} indexes past its vertices")
+        faces.append((prim.material if prim.material is not None else -1, f))
+    if not verts:
+        return None
+    v = np.concatenate(verts)
+    n_t = {len(t) for t in targets}
+    if len(n_t) > 1:
+        raise DataError(f"{r.path}: mesh {mesh.name!r}: primitives have different numbers of "
+                        "morph targets")
+    n_targets = n_t.pop()
+    deltas = (np.concatenate([np.stack(t) if t else np.zeros((0, len(vv), 3))
+                              for t, vv in zip(targets, verts, strict=True)], axis=1)
+              if n_targets else None)
+    names = list((mesh.extras or {}).get("targetNames") or [])
+    if not names and mesh.primitives and mesh.primitives[0].extras:
+        names = list(mesh.primitives[0].extras.get("targetNames") or [])
+    if len(names) != n_targets:
+        names = [f"morph{k}" for k in range(n_targets)]
+    uv = np.concatenate(uvs) if all(u is not None for u in uvs) else None
+    jt = wt = None
+    if node.skin is not None and all(j is not None for j in joints) and all(
+            w is not None for w in weights):
+        skin = g.skins[node.skin]
+        jt_local = np.concatenate(joints).astype(np.int64)
+        wt = np.concatenate(weights).astype(np.float64)
+        jnodes = np.asarray(skin.joints, np.int64)
+        if jt_local.max(initial=0) >= len(jnodes):
+            raise DataError(f"{r.path}: skin {node.skin} joint index out of range")
+        jt = jnodes[jt_local]
+        ibm = (r.accessor(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
+               if skin.inverseBindMatrices is not None else np.tile(np.eye(4), (len(jnodes),
+                                                                                1, 1)))
+        mats = world[jnodes] @ ibm  # (J, 4, 4) skinning matrices at rest
+        s = wt.sum(1, keepdims=True)
+        wn = wt / np.where(s > 0, s, 1.0)
+        m = np.einsum("nk,nkij->nij", wn, mats[jt_local])
+        v = np.einsum("nij,nj->ni", m[:, :3, :3], v) + m[:, :3, 3]
+        if deltas is not None:
+            deltas = np.einsum("nij,mnj->mni", m[:, :3, :3], deltas)
+    else:
+        m = world[ni]
+        v = v @ m[:3, :3].T + m[:3, 3]
+        if deltas is not None:
+            deltas = deltas @ m[:3, :3].T
+    name = node.name or mesh.name or f"mesh{node.mesh}"
+    return SceneMesh(name, ni, v, faces, uv, names,
+                     None if deltas is None else deltas.astype(np.float32), jt, wt)
+
+
+def _vrm(g, scene: GltfScene, mesh_of_node: dict[int, list[int]]) -> None:
+    ext = g.extensions or {}
+    if "VRMC_vrm" in ext:
+        vrm = ext["VRMC_vrm"]
+        scene.vrm_version = 1
+        for bone, spec in ((vrm.get("humanoid") or {}).get("humanBones") or {}).items():
+            if isinstance(spec, dict) and "node" in spec:
+                scene.bones[bone] = int(spec["node"])
+        for group in ("preset", "custom"):
+            for name, spec in ((vrm.get("expressions") or {}).get(group) or {}).items():
+                binds = []
+                for b in spec.get("morphTargetBinds") or []:
+                    for mi in mesh_of_node.get(int(b["node"]), []):
+                        binds.append((mi, int(b["index"]), float(b.get("weight", 1.0))))
+                scene.expressions[name] = binds
+    elif "VRM" in ext:
+        vrm = ext["VRM"]
+        scene.vrm_version = 0
+        for hb in (vrm.get("humanoid") or {}).get("humanBones") or []:
+            if "bone" in hb and "node" in hb:
+                scene.bones[hb["bone"]] = int(hb["node"])
+        nodes_of_mesh: dict[int, list[int]] = {}
+        for ni, nd in enumerate(g.nodes):
+            if nd.mesh is not None:
+                nodes_of_mesh.setdefault(nd.mesh, []).append(ni)
+        for grp in (vrm.get("blendShapeMaster") or {}).get("blendShapeGroups") or []:
+            name = grp.get("presetName") or grp.get("name")
+            if not name or name == "unknown":
+                name = grp.get("name")
+            binds = []
+            for b in grp.get("binds") or []:
+                for ni in nodes_of_mesh.get(int(b["mesh"]), []):
+                    for mi in mesh_of_node.get(ni, []):
+                        binds.append((mi, int(b["index"]), float(b.get("weight", 100)) / 100))
+            if name:
+                scene.expressions[name] = binds
+
+
+def read_gltf(path: str | Path) -> GltfScene:
+    """Read ``path`` (.gltf, .glb or .vrm). Raises :class:`DataError` with one line for files
+    that are missing, broken or hold no triangle mesh."""
+    p = Path(path)
+    if not p.is_file():
+        raise DataError(f"{p}: no such file")
+    r = _Reader(p)
+    g = r.g
+    world, parent, in_scene = _world(g)
+    meshes: list[SceneMesh] = []
+    mesh_of_node: dict[int, list[int]] = {}
+    for ni in in_scene:
+        if g.nodes[ni].mesh is None:
+            continue
+        if g.nodes[ni].mesh >= len(g.meshes):
+            raise DataError(f"{p}: node {ni} names mesh {g.nodes[ni].mesh}, which does not exist")
+        sm = _mesh_node(r, ni, world)
+        if sm is not None and any(len(f) for _, f in sm.primitives):
+            mesh_of_node.setdefault(ni, []).append(len(meshes))
+            meshes.append(sm)
+    if not meshes:
+        raise DataError(f"{p}: the file holds no triangle mesh (nothing to animate)")
+    scene = GltfScene(p, meshes, _materials(r), [nd.name or f"node{i}" for i, nd in
+                                                 enumerate(g.nodes)], world, parent)
+    _vrm(g, scene, mesh_of_node)
+    return scene

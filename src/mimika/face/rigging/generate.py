@@ -1,0 +1,148 @@
+"""Blendshapes for any face from seed 002's fields: the shipped per-shape fields (fitted on the
+ICT Face Model's 53 expression shapes, ``face/data/ict_shape_fields.json``) are carried to the
+face by its 68 landmarks (:func:`~mimika.face.fitting.transfer.transfer_fields`) and evaluated
+on its vertices."""
+
+from __future__ import annotations
+
+import functools
+import json
+from collections.abc import Iterable
+from dataclasses import replace
+from importlib import resources
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from mimika.face.fitting.shapes import shape_fields
+from mimika.face.fitting.splits import similarity_transform
+from mimika.face.fitting.transfer import transfer_fields
+from mimika.face.head import Head
+from mimika.face.rigs.field import FieldSet, LinearField, SplitField
+
+__all__ = ["ARKIT_SUMS", "Shapes", "generate_shapes", "shape_document", "template_landmarks"]
+
+#: ARKit shapes that are one shape per side in the ICT set: generated as the sum of both
+ARKIT_SUMS = {"browInnerUp": ("browInnerUp_L", "browInnerUp_R"),
+              "cheekPuff": ("cheekPuff_L", "cheekPuff_R")}
+#: shape name → {object name: (N, 3) float32 deltas in cm}
+Shapes = dict[str, dict[str, np.ndarray]]
+
+
+@functools.cache
+def shape_document() -> dict:
+    """The shipped per-shape fields (``mimika.face.fitting.shapes.fit_ict_shapes``, rich
+    family), as a fields document."""
+    text = resources.files("mimika.face").joinpath("data/ict_shape_fields.json").read_text(
+        "utf-8")
+    return json.loads(text)
+
+
+def template_landmarks() -> np.ndarray:
+    """The 68 landmarks (cm) of the face the shipped fields were fitted on (ICT)."""
+    return np.asarray(shape_document()["source"]["landmarks"], float)
+
+
+def available() -> tuple[str, ...]:
+    """Shapes the shipped fields can generate (ICT names, plus the ARKit sums)."""
+    return (*shape_document()["shapes"], *ARKIT_SUMS)
+
+
+def _support(f: LinearField, eps: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Boxes (lo, hi) in field coordinates outside which ``f`` moves points less than
+    ``eps`` (field units): each Gaussian to where it falls below eps, each RBF centre to 4σ."""
+    boxes = []
+    for g in f.gaussians:
+        r = np.sqrt(2 * np.log(max(abs(g.eta), eps) / eps)) * np.sqrt(np.diag(np.linalg.inv(
+            g.B)))
+        boxes.append((g.mean - r, g.mean + r))
+    if f.rbf is not None:
+        r = 4.0 * f.rbf.sigma
+        boxes.append((f.rbf.centers.min(0) - r, f.rbf.centers.max(0) + r))
+    return boxes
+
+
+def _in_boxes(u: np.ndarray, boxes: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    out = np.zeros(len(u), bool)
+    for lo, hi in boxes:
+        out |= np.all((u >= lo) & (u <= hi), axis=1)
+    return out
+
+
+def _field_on(fs: FieldSet, field: LinearField | SplitField, upper: np.ndarray | None,
+              v: np.ndarray, eps: float) -> np.ndarray:
+    """Displacements (cm) of ``field`` at points ``v``, evaluated only inside its support
+    (FieldRig.field_at, culled for large meshes); ``upper``: split weights of the points."""
+    u = fs.to_u(v)
+    out = np.zeros_like(u)
+    halves = ((field, None),) if isinstance(field, LinearField) else (
+        (field.upper, upper), (field.lower, None if upper is None else 1.0 - upper))
+    for f, w in halves:
+        if f is None:
+            continue
+        sel = _in_boxes(u, _support(f, eps))
+        if f.rbf is not None:  # the residual: only within 4σ of one of its centres
+            near = np.isfinite(cKDTree(f.rbf.centers).query(
+                u, distance_upper_bound=4.0 * f.rbf.sigma)[0])
+            sel &= near | _in_boxes(u, _support(replace(f, rbf=None), eps))
+        if w is not None:
+            sel &= w > 0
+        if sel.any():
+            d = f(u[sel])
+            out[sel] += d if w is None else d * w[sel, None]
+    return fs.to_head(out)
+
+
+def _rigid(v: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """The displacement of the rigid motion that best matches ``d`` at points ``v``
+    (Kabsch), so a tooth row or tongue moves as one piece."""
+    if not np.any(d):
+        return d
+    _, r, _ = similarity_transform(v, v + d)  # its rotation; the scale is dropped
+    c = v.mean(0)
+    return (v - c) @ r.T + c + d.mean(0) - v
+
+
+def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
+    """Deltas of shapes ``names`` (default: all available) on every object of ``head`` that
+    their fields move: face objects per vertex; rigid objects (teeth, tongue) take one side of
+    the mouth split — the side most of their vertices lie on (the FieldRig uses the centroid,
+    which puts long upper teeth below the lips)."""
+    full = shape_document()
+    # the shapes are in field coordinates: only the frame, splits and source move
+    doc = transfer_fields({k: v for k, v in full.items() if k != "shapes"}, head)
+    doc["shapes"] = full["shapes"]
+    fs = shape_fields(doc, source="ict_shape_fields.json")
+    eps = 1e-4 / fs.scale  # 1 µm
+    upper = {}
+    for sname, sp in fs.splits.items():
+        for o in head.objects:
+            v = o.vertices.astype(float)
+            w = sp.upper_weight(v)
+            # rigid objects (teeth rows, tongue) go whole, by where most of them lies
+            upper[sname, o.name] = w if o.category == "face" else np.full(
+                len(v), float(w.mean() > 0.5))
+    want = list(available() if names is None else names)
+    base = {n for w in want for n in ARKIT_SUMS.get(w, (w,))}
+    out: Shapes = {}
+    for name in base:
+        if name not in fs.linear:
+            raise KeyError(name)
+        per = {}
+        for o in head.objects:
+            f = fs.linear[name].get(o.category)
+            if f is None:
+                continue
+            w = None if isinstance(f, LinearField) else upper[f.split, o.name]
+            d = _field_on(fs, f, w, o.vertices.astype(float), eps)
+            if o.category != "face":  # teeth and tongue stay rigid: the best rigid motion
+                d = _rigid(o.vertices.astype(float), d)
+            d = d.astype(np.float32)
+            if np.abs(d).max() > 1e-6:
+                per[o.name] = d
+        out[name] = per
+    for total, parts in ARKIT_SUMS.items():
+        if total in want:
+            objs = {k for p in parts for k in out[p]}
+            out[total] = {k: sum(out[p].get(k, 0) for p in parts) for k in objs}
+    return {n: out[n] for n in want}
