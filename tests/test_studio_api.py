@@ -34,6 +34,11 @@ def project_doc(text: str = "Hello there.", events: list | None = None) -> dict:
                                             "onset": 0.3, "offset": 0.4}]}]}}
 
 
+#: the studio answers only the Host names it serves (DNS rebinding): the tests use its address
+BASE = "http://127.0.0.1:8765"
+LIVE = "ws://127.0.0.1:8765/api/live"
+
+
 @pytest.fixture(scope="module")
 def app(tmp_path_factory):
     d = tmp_path_factory.mktemp("studio")
@@ -42,7 +47,7 @@ def app(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def client(app):
-    with TestClient(app) as c:
+    with TestClient(app, base_url=BASE) as c:
         yield c
 
 
@@ -246,7 +251,7 @@ def _drain(ws):
 
 
 def test_live_websocket_streams_per_sentence(client):
-    with client.websocket_connect("/api/live") as ws:
+    with client.websocket_connect(LIVE) as ws:
         ws.send_text(json.dumps({"type": "ping"}))
         assert json.loads(ws.receive_text()) == {"type": "pong"}
         ws.send_text(json.dumps({"type": "speak", "id": 7, "text": "One. Two three.",
@@ -277,7 +282,7 @@ def test_live_refuses_other_origins(client):
     from starlette.websockets import WebSocketDisconnect
 
     with pytest.raises(WebSocketDisconnect), client.websocket_connect(
-            "/api/live", headers={"Origin": "http://evil.example"}) as ws:
+            LIVE, headers={"Origin": "http://evil.example"}) as ws:
         ws.receive_text()
 
 
@@ -326,7 +331,7 @@ def test_latent_feature_detected(client):
 # -- limits and errors ---------------------------------------------------------------------------
 def test_body_size_limit(tmp_path):
     small = create_app(tmp_path / "p", library_path=tmp_path / "e.json", max_body=1000)
-    with TestClient(small) as c:
+    with TestClient(small, base_url=BASE) as c:
         big = {"aus": {"AU12": 0.5}, "disabled": ["x" * 2000]}
         assert "limit" in err(c.post("/api/blend", json=big), 413)
 
@@ -343,7 +348,7 @@ def test_body_size_limit(tmp_path):
 def test_cross_origin_writes_refused(client):
     r = client.post("/api/blend", json={"aus": {}}, headers={"Origin": "http://evil.example"})
     assert "not allowed" in err(r, 403)
-    ok = client.post("/api/blend", json={"aus": {}}, headers={"Origin": "http://testserver"})
+    ok = client.post("/api/blend", json={"aus": {}}, headers={"Origin": BASE})
     assert ok.status_code == 200
 
 

@@ -130,48 +130,11 @@ class BatchSpec:
 
 # -- YAML with line numbers -------------------------------------------------------------------
 def _read_yaml(text: str, source: str) -> tuple[Any, dict[Path_, int]]:
-    """Parse ``text`` into plain data plus the 1-based line of every key and list item."""
-    try:
-        import yaml
-    except ImportError as e:
-        raise SpecError(f"reading batch specs needs PyYAML ({e}); install it with: "
-                        "pip install 'mimika[batch]'") from None
+    """Parse ``text`` into plain data plus the 1-based line of every key and list item
+    (safely: :mod:`mimika.batch.yamlload`)."""
+    from mimika.batch.yamlload import read_yaml
 
-    lines: dict[Path_, int] = {}
-    loader = yaml.SafeLoader(text)
-    try:
-        try:
-            root = loader.get_single_node()
-        except yaml.YAMLError as e:
-            mark = getattr(e, "problem_mark", None) or getattr(e, "context_mark", None)
-            where = f"{source}:{mark.line + 1}:{mark.column + 1}" if mark else source
-            problem = getattr(e, "problem", None) or str(e)
-            raise SpecError(f"{where}: invalid YAML: {problem}") from None
-        if root is None:
-            return None, lines
-
-        def conv(node: Any, path: Path_) -> Any:
-            lines.setdefault(path, node.start_mark.line + 1)
-            if isinstance(node, yaml.MappingNode):
-                out: dict[Any, Any] = {}
-                for k, v in node.value:
-                    key = loader.construct_object(k, deep=True)
-                    if not isinstance(key, str | int):
-                        raise SpecError(f"{source}:{k.start_mark.line + 1}: keys must be text, "
-                                        f"not {key!r}")
-                    if key in out:
-                        raise SpecError(f"{source}:{k.start_mark.line + 1}: "
-                                        f"{_where((*path, key))} is given twice")
-                    lines[(*path, key)] = k.start_mark.line + 1
-                    out[key] = conv(v, (*path, key))
-                return out
-            if isinstance(node, yaml.SequenceNode):
-                return [conv(v, (*path, i)) for i, v in enumerate(node.value)]
-            return loader.construct_object(node, deep=True)
-
-        return conv(root, ()), lines
-    finally:
-        loader.dispose()
+    return read_yaml(text, source, error=SpecError)
 
 
 def _where(path: Path_) -> str:
@@ -595,7 +558,26 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
     if "intensities" in d and not (spec.aus or spec.aus_keyword or spec.expressions):
         raise c.error(("intensities",), "intensities scale 'aus' and 'expressions'; the spec "
                                         "has neither")
+    _check_items(c, spec)
     return spec
+
+
+def item_count(spec: BatchSpec) -> int:
+    """How many items (images) ``spec`` renders — an upper bound for ``aus: modelled``."""
+    sets = 64 if spec.aus_keyword else len(spec.aus)
+    contents = (int(spec.neutral) + (sets + len(spec.expressions)) * len(spec.intensities)
+                + (spec.sample.count if spec.sample else 0))
+    faces = sum(len(spec.identities) if is_ict(h) else 1 for h in spec.heads)
+    return contents * faces * len(spec.views)
+
+
+def _check_items(c: _Checker, spec: BatchSpec) -> None:
+    from mimika import limits
+
+    n = item_count(spec)
+    if n > limits.current().max_items:
+        raise c.error(("sample", "count") if spec.sample else (),
+                      str(limits.over("max_items", f"the spec has {limits.fmt(n)} items")))
 
 
 def load_spec(path: str | os.PathLike) -> BatchSpec:

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import progress_bar, size_arg
+from mimika.commands._util import limit_options, progress_bar, size_arg
 from mimika.errors import DataError, ParameterError
 
 VIEWS = ("front", "three-quarter", "profile")
@@ -25,10 +25,17 @@ def _read_article(args: argparse.Namespace) -> tuple[str, str]:
                              "not both or neither")
     if args.example is not None:
         return example_bulletin(args.example), f"example bulletin ({args.example})"
+    from mimika.limits import check_text, current, over
+
     if args.article == "-":
-        return sys.stdin.read(), "<stdin>"
+        text = sys.stdin.read(current().max_text + 1)
+        check_text(text, "the article on stdin")
+        return text, "<stdin>"
     p = Path(args.article)
     try:
+        size = p.stat().st_size  # not read into memory when surely too long
+        if size > 4 * current().max_text:
+            raise over("max_text", f"article {str(p)!r} has at least {size // 4} characters")
         return p.read_text("utf-8"), str(p)
     except FileNotFoundError:
         raise DataError(f"article {str(p)!r} does not exist") from None
@@ -47,6 +54,7 @@ def _layers(args: argparse.Namespace) -> set[str]:
 
 
 def cmd_news(args: argparse.Namespace) -> int:
+    from mimika.limits import check_count
     from mimika.newsreader import parse_article, render_ablations, render_news
     from mimika.speech.espeak import check_lang
 
@@ -55,6 +63,8 @@ def cmd_news(args: argparse.Namespace) -> int:
     check_lang(lang)
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers={args.workers} must be 1 or more")
+    if args.workers is not None:
+        check_count("max_workers", args.workers, "--workers")
     if args.ablations is None and args.output is None:
         raise ParameterError("give the output video with -o news.mp4 (or --ablations DIR)")
     article = parse_article(text, source=source)
@@ -131,4 +141,5 @@ def register(sub: argparse._SubParsersAction) -> None:
         name = FLAG_NAMES[feat]
         p.add_argument(f"--no-{name}", action="store_true", help=f"switch {name} off")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or messages")
+    limit_options(p, "max_duration", "max_frames", "max_text")
     p.set_defaults(func=cmd_news)

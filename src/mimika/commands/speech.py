@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
 
 VISEME_FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead", "ovr")
@@ -153,6 +154,7 @@ def register(sub) -> None:
     q.add_argument("-o", "--output", metavar="FILE.wav", help="WAV file to write (16-bit mono)")
     q.add_argument("--timing", metavar="FILE.json", help="phoneme/word/sentence timing JSON")
     _outputs(q)
+    limit_options(q, "max_duration", "max_text")
     q.set_defaults(func=cmd_say)
 
     a = sub.add_parser("align", help="recorded speech (+ transcript) → phoneme timing, AUs, "
@@ -165,6 +167,7 @@ def register(sub) -> None:
     a.add_argument("--lang", default="en", help="espeak language of the transcript (en)")
     a.add_argument("-o", "--output", metavar="FILE.json", help="timing JSON to write")
     _outputs(a)
+    limit_options(a, "max_duration")
     a.set_defaults(func=cmd_align)
 
     v = sub.add_parser("voices", help="list espeak-ng voices (and --variants)")

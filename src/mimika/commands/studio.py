@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
 
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
@@ -24,14 +25,15 @@ def cmd_studio(args: argparse.Namespace) -> int:
     except ImportError:
         raise ParameterError("mimika studio needs FastAPI and uvicorn: "
                              "pip install 'mimika[studio]'") from None
-    from mimika.studio.app import MAX_BODY, create_app
+    from mimika.studio.app import create_app
     from mimika.studio.assets import ensure_vendor
 
     if not 1 <= args.port <= 65535:
         raise ParameterError(f"--port {args.port} must be within 1…65535")
     ensure_vendor()
     projects = Path(args.projects) if args.projects else default_projects_dir()
-    app = create_app(projects, head=args.head, library_path=args.library, warm_up=True)
+    app = create_app(projects, head=args.head, library_path=args.library, warm_up=True,
+                     host=args.host, allowed_hosts=args.allow_host or ())
     host = args.host
     url = f"http://{'[' + host + ']' if ':' in host else host}:{args.port}/"
     if host not in LOOPBACK:
@@ -44,7 +46,7 @@ def cmd_studio(args: argparse.Namespace) -> int:
 
         threading.Timer(1.0, webbrowser.open, args=(url,)).start()
     uvicorn.run(app, host=host, port=args.port, log_level="warning" if args.quiet else "info",
-                ws_max_size=MAX_BODY)
+                ws_max_size=app.state.max_body)
     return 0
 
 
@@ -61,5 +63,9 @@ def register(sub) -> None:
     q.add_argument("--library", metavar="FILE",
                    help="user expression library (default: ~/.local/share/mimika/expressions.json)")
     q.add_argument("--no-browser", action="store_true", help="do not open a browser window")
+    q.add_argument("--allow-host", action="append", metavar="NAME",
+                   help="also answer requests for this Host name (repeatable; *.example.org "
+                        "matches subdomains); others get 403 — a guard against DNS rebinding")
     q.add_argument("-q", "--quiet", action="store_true")
+    limit_options(q, "max_duration", "max_frames", "max_export_seconds", "max_body")
     q.set_defaults(func=cmd_studio)

@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import add_head_arg, size_arg
+from mimika.commands._util import add_head_arg, limit_options, size_arg
 from mimika.errors import ParameterError
 
 CSV_FORMATS = ("au", "openface", "arkit")
@@ -17,6 +17,8 @@ READER_FLAGS = {"fill": ("fill", "--fill"), "source": ("source", "--from"),
                 "fps": ("take_fps", "--take-fps"), "scale": ("scale", "--scale"),
                 "timecodes": ("timecodes", "--timecodes"), "max_gap": ("max_gap", "--max-gap")}
 OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml", ".mp4")
+#: most tiles in a .png contact strip
+MAX_SHEET = 400
 
 
 def _say(args, msg: str) -> None:
@@ -142,6 +144,9 @@ def cmd_render(args: argparse.Namespace) -> int:
     from mimika.timeline import sample
 
     tl, settings = _load_timeline(args.script, rate=args.rate)
+    if tl.end <= 0:
+        raise ParameterError(f"{args.script}: nothing to render: the script has no text, no "
+                             "element and no duration")
     tl = _sync(args, tl)
     if Path(args.output).suffix.lower() == ".mp4":
         return _render_video(args, tl)
@@ -168,9 +173,11 @@ def _reader_options(args, fmt: str) -> dict:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     from mimika.io.tracks import detect_format, read_track
+    from mimika.limits import check_frames
 
     fmt = args.input_format or detect_format(args.take)
     track = read_track(args.take, format=fmt, **_reader_options(args, fmt))
+    check_frames(track.n_frames, f"take {args.take}")
     if args.fps:
         track = track.resample(fps=args.fps)
     meta = track.meta
@@ -247,9 +254,24 @@ def _common(p, *, head: bool = True) -> None:
     p.add_argument("--view", default="front", choices=("front", "three-quarter", "profile"),
                    help="camera for .png")
     p.add_argument("--size", type=size_arg, default=(320, 240), help="tile size for .png")
-    p.add_argument("--frames", type=int, default=8, help="frames in a .png contact strip")
-    p.add_argument("--columns", type=int, default=8, help="tiles per row in a .png")
+    p.add_argument("--frames", type=_count(MAX_SHEET), default=8,
+                   help=f"frames in a .png contact strip (1–{MAX_SHEET})")
+    p.add_argument("--columns", type=_count(MAX_SHEET), default=8, help="tiles per row in a .png")
     p.add_argument("-q", "--quiet", action="store_true")
+    limit_options(p, "max_duration", "max_frames", "max_text")
+
+
+def _count(top: int):
+    def parse(text: str) -> int:
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if not 1 <= n <= top:
+            raise argparse.ArgumentTypeError(f"{n} must be within 1…{top}")
+        return n
+
+    return parse
 
 
 def register(sub) -> None:
@@ -298,6 +320,7 @@ def register(sub) -> None:
     q.add_argument("--fps", type=float)
     q.add_argument("--blend", action="store_true")
     q.add_argument("-q", "--quiet", action="store_true")
+    limit_options(q, "max_duration", "max_frames", "max_text")
     q.set_defaults(func=cmd_plot)
 
     j = sub.add_parser("project", help="create, check or print project files")
@@ -307,4 +330,5 @@ def register(sub) -> None:
     j.add_argument("-o", "--output", help="file to write (new, script)")
     j.add_argument("--head", help="head setting (new)")
     j.add_argument("--fps", type=float, help="fps setting (new)")
+    limit_options(j, "max_duration", "max_text")
     j.set_defaults(func=cmd_project)

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import ParameterError
 
 log = logging.getLogger(__name__)
@@ -45,6 +46,7 @@ def parse_article(text: str, *, source: str = "<article>") -> Article:
     """An :class:`Article` from plain text or script text; empty input raises ParameterError."""
     if not isinstance(text, str) or not text.strip():
         raise ParameterError(f"article {source} is empty; give at least one sentence to read")
+    limits.check_text(text, f"article {source}")
     if is_script(text):
         from mimika.markup import parse_script
 
@@ -173,6 +175,7 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
     t = 0.0
     char_base = 0
     full = article.text
+    limits.check_speech(full, rate, f"article {article.source}")
 
     def silence(d: float) -> None:
         nonlocal t
@@ -209,6 +212,7 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
             chunks.append(u.audio.astype(np.float32))
             t0, t = t, t + len(u.audio) / u.sr
             sents.append(Sentence(sent, t0, t))  # the sentence spans its synthesised chunk
+            limits.check_duration(t, f"the speech of article {article.source}")
         char_base += len(para) + 2
     silence(TAIL)
     audio = np.concatenate(chunks).astype(np.float32)

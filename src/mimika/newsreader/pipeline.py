@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import tempfile
@@ -13,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import DataError, ParameterError
 from mimika.newsreader.article import Article, parse_article, speak_article
 from mimika.tracks import AUTrack, valid_fps
@@ -272,6 +274,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         raise ParameterError(f"size={w}x{h}: width and height must be even for H.264 video")
     enabled = check_layers(layers)
     fps = valid_fps(fps)
+    if news is None:  # refuse an article too long to say before loading anything
+        limits.check_speech(text if isinstance(text, str) else text.text, rate, "the article")
     tm: dict[str, float] = {}
     t_all = time.perf_counter()
     if rig is None:
@@ -312,12 +316,13 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     else:  # pad the audio to the video's length so both streams end together
         sound = np.zeros(round(n / fps * utt.sr), np.float32)
         sound[: min(len(sound), len(utt.audio))] = utt.audio[: len(sound)]
+    frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
+                           skin_shader="skin" in enabled, hair="hair" in enabled,
+                           workers=workers, timings=tm)
+    # closing: an interrupted render stops its worker processes at once
     with VideoWriter(out, fps=fps, size=(w, h), audio=sound, sr=utt.sr, crf=crf,
-                     preset=preset) as vw:
-        for i, img in enumerate(render_frames(rig, track, size=(w, h), view=view,
-                                              samples=samples, skin_shader="skin" in enabled,
-                                              hair="hair" in enabled, workers=workers,
-                                              timings=tm)):
+                     preset=preset) as vw, contextlib.closing(frames):
+        for i, img in enumerate(frames):
             vw.write(img)
             if progress is not None:
                 progress(i + 1, n)

@@ -12,6 +12,7 @@ import re
 import numpy as np
 
 from mimika.errors import ParameterError
+from mimika.limits import check_speech
 from mimika.speech.utterance import Phone, Sentence, Utterance, Word
 
 log = logging.getLogger(__name__)
@@ -134,6 +135,7 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
 
     if not isinstance(text, str) or not text.strip():
         raise ParameterError("text is empty; give at least one word to speak")
+    check_speech(text, rate)  # before synthesising (mimika.limits)
     code = espeak.check_lang(lang)
     if ssml:
         from mimika.speech.ssml import parse, speak

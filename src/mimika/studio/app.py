@@ -1,13 +1,16 @@
 """The studio's FastAPI application: routers by topic, JSON errors, request limits, static page.
 
-Every error reaches the client as ``{"error": "…"}`` with a 4xx status (5xx only for bugs);
-request bodies are limited to :data:`MAX_BODY` bytes; requests from another origin are refused.
+Every error reaches the client as ``{"error": "…"}`` with a 4xx status (5xx only for bugs and
+exports past their time limit); request bodies are limited to :data:`MAX_BODY` bytes;
+requests naming a Host the studio does not serve (DNS rebinding, :mod:`mimika.studio.guard`)
+and writes from another origin are refused.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +21,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 import mimika
+from mimika import limits
 from mimika.errors import MimikaError
 from mimika.studio.state import StudioState
 
@@ -25,8 +29,8 @@ log = logging.getLogger(__name__)
 
 STATIC = Path(__file__).parent / "static"
 VENDOR = STATIC / "vendor" / "three" / "three.module.js"
-#: largest accepted request body (bytes) and WebSocket message
-MAX_BODY = 2 * 1024 * 1024
+#: largest accepted request body (bytes) and WebSocket message (mimika.limits: max_body)
+MAX_BODY = limits.DEFAULTS.max_body
 
 
 def error_response(status: int, message: str, **extra: Any) -> JSONResponse:
@@ -35,7 +39,12 @@ def error_response(status: int, message: str, **extra: Any) -> JSONResponse:
 
 def _status_of(e: MimikaError) -> int:
     from mimika.markup.project import ProjectError
+    from mimika.studio.jobs import Cancelled
 
+    if isinstance(e, Cancelled):
+        return 409
+    if isinstance(e, limits.LimitError) and e.limit == "max_export_seconds":
+        return 503
     return 422 if isinstance(e, ProjectError) else 400
 
 
@@ -116,8 +125,9 @@ def _validation_message(exc: RequestValidationError) -> str:
 
 def create_app(projects_dir: str | Path, *, head: str = "builtin",
                library_path: str | Path | None = None,
-               controller_path: str | Path | None = None, max_body: int = MAX_BODY,
-               warm_up: bool = False) -> FastAPI:
+               controller_path: str | Path | None = None, max_body: int | None = None,
+               warm_up: bool = False, host: str = "127.0.0.1",
+               allowed_hosts: Iterable[str] = ()) -> FastAPI:
     """The studio app serving ``projects_dir``.
 
     Parameters
@@ -126,11 +136,15 @@ def create_app(projects_dir: str | Path, *, head: str = "builtin",
     head : ``builtin`` or ``ict``
     library_path : user expression library (default ``$MIMIKA_DATA_DIR/expressions.json``)
     controller_path : a WGAN checkpoint for the latent sliders (default: the shipped one)
-    max_body : request size limit in bytes
+    max_body : request size limit in bytes (default: ``mimika.limits`` max_body)
     warm_up : load the head and espeak-ng in the background at start-up
+    host : the address the server binds; requests must name it (or an allowed name) as Host
+    allowed_hosts : more Host names to answer (``*.example.org`` matches subdomains)
     """
     from contextlib import asynccontextmanager
 
+    from mimika.studio.guard import HostGuard, HostPolicy
+    from mimika.studio.jobs import Jobs, sweep_temp_dirs
     from mimika.studio.routers import ROUTERS
 
     state = StudioState(projects_dir, head=head, library_path=library_path,
@@ -144,12 +158,17 @@ def create_app(projects_dir: str | Path, *, head: str = "builtin",
             threading.Thread(target=_warm, args=(state,), name="studio-warm-up",
                              daemon=True).start()
         yield
+        app.state.jobs.cancel_all("the studio is stopping")
 
     app = FastAPI(title="mimika studio", version=mimika.__version__, lifespan=lifespan,
                   docs_url="/api/docs", redoc_url=None, openapi_url="/api/openapi.json")
+    max_body = max_body or limits.current().max_body
+    sweep_temp_dirs()  # export folders of a studio that was killed
     app.state.studio = state
     app.state.max_body = max_body
+    app.state.jobs = Jobs()
     app.add_middleware(LimitsMiddleware, max_body=max_body)
+    app.add_middleware(HostGuard, policy=HostPolicy(host, allowed_hosts))  # outermost
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:

@@ -114,9 +114,11 @@ def entry_track(entry: SpeechEntry, timeline: Any, *, fps: float, blend: bool) -
     from mimika.tracks import AUTrack
 
     segs = [segment_frames(s, timeline, fps=fps, blend=False) for s in entry.segments]
+    from mimika.limits import check_timeline
+
     speech_end = entry.duration
     tl_end = timeline.end if timeline is not None else 0.0
-    n = max(1, math.ceil(max(speech_end, tl_end) * fps - 1e-9) + 1)
+    n = check_timeline(max(speech_end, tl_end), fps, "the speech and timeline")
     t = np.arange(n) / fps
     chans: list[str] = []
     for s in segs:

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import DataError, MimikaError
 
 log = logging.getLogger(__name__)
@@ -51,6 +52,11 @@ class SpeechEntry:
     def duration(self) -> float:
         return sum(s.duration for s in self.segments)
 
+    @property
+    def nbytes(self) -> int:
+        """Memory of the audio and mouth frames it holds."""
+        return sum(s.utterance.audio.nbytes + s.mouth.values.nbytes for s in self.segments)
+
     def audio(self) -> tuple[np.ndarray, int]:
         sr = self.segments[0].utterance.sr if self.segments else 22050
         parts = [s.utterance.audio for s in self.segments]
@@ -59,12 +65,11 @@ class SpeechEntry:
 
 def gltf_bytes(rig: Any, track: Any, *, name: str = "mimika") -> bytes:
     """``rig``'s head (+ ``track``'s animation) as GLB bytes, through :func:`write_gltf`."""
-    import tempfile
-
     from mimika.io.gltf import write_gltf
+    from mimika.studio.jobs import temp_dir
 
-    with tempfile.TemporaryDirectory(prefix="mimika-studio-") as d:
-        return write_gltf(Path(d) / f"{name}.glb", rig, track).read_bytes()
+    with temp_dir() as d:
+        return write_gltf(d / f"{name}.glb", rig, track).read_bytes()
 
 
 def speech_key(text: str, lang: str, rate: int) -> str:
@@ -165,11 +170,16 @@ class StudioState:
 
     # -- speech cache -------------------------------------------------------------------------
     def put_speech(self, entry: SpeechEntry) -> None:
+        """Cache ``entry``; the oldest go once over ``speech_cache`` entries or
+        ``max_cache_mb`` megabytes (:mod:`mimika.limits`), the newest always stays."""
+        cap = limits.current().max_cache_mb * 1e6
         with self._speech_lock:
             self._speech[entry.key] = entry
             self._speech.move_to_end(entry.key)
-            while len(self._speech) > self._speech_max:
-                self._speech.popitem(last=False)
+            size = sum(e.nbytes for e in self._speech.values())
+            while len(self._speech) > 1 and (len(self._speech) > self._speech_max or
+                                             size > cap):
+                size -= self._speech.popitem(last=False)[1].nbytes
 
     def get_speech(self, key: str) -> SpeechEntry | None:
         with self._speech_lock:

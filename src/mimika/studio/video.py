@@ -28,7 +28,7 @@ def available() -> str | None:
 
 def render_mp4(rig: Any, track: Any, path: str | Path, *, audio: np.ndarray | None = None,
                sr: int | None = None, size: tuple[int, int] = (640, 480),
-               view: str = "front") -> Path:
+               view: str = "front", progress: Any = None) -> Path:
     """Render ``track`` on ``rig``'s head into an H.264/AAC MP4 at ``track.fps`` (atomic)."""
     from mimika.errors import ParameterError
     from mimika.render.video import write_track_video
@@ -36,6 +36,7 @@ def render_mp4(rig: Any, track: Any, path: str | Path, *, audio: np.ndarray | No
     if track.duration > MAX_SECONDS:
         raise ParameterError(f"the clip is {track.duration:.1f} s; the studio renders at most "
                              f"{MAX_SECONDS:.0f} s (use 'mimika render' for longer ones)")
-    write_track_video(rig, track, path, audio=audio, sr=sr, size=size, view=view)
+    write_track_video(rig, track, path, audio=audio, sr=sr, size=size, view=view,
+                      progress=progress)
     log.info("studio: wrote %s (%d frames)", path, track.n_frames)
     return Path(path)

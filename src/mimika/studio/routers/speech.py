@@ -27,7 +27,8 @@ from fastapi import APIRouter, HTTPException, Request, Response, WebSocket, WebS
 from pydantic import ValidationError
 from starlette.concurrency import run_in_threadpool
 
-from mimika.errors import MimikaError
+from mimika import limits
+from mimika.errors import DataError, MimikaError
 from mimika.studio import speaking
 from mimika.studio.routers._deps import state_of
 from mimika.studio.schemas import FramesRequest, SpeakRequest
@@ -117,6 +118,11 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
     except MimikaError as e:
         await send.json({"type": "error", "id": sid, "message": str(e)})
         return
+    except Exception as e:  # a bug: answer anyway, never leave the page waiting
+        log.exception("studio: live speech could not read the project")
+        await send.json({"type": "error", "id": sid,
+                         "message": f"internal error: {type(e).__name__}: {e}"})
+        return
     key = speech_key(req.text, req.lang, req.rate)
     cached = st.get_speech(key)
     reuse = cached.segments if cached is not None and cached.done else None
@@ -182,10 +188,11 @@ async def live(ws: WebSocket) -> None:
                                  f"{limit} bytes"})
                 continue
             try:
-                data = json.loads(text)
-                if not isinstance(data, dict):
-                    raise ValueError("not an object")
-            except ValueError:
+                data = limits.loads_json(text, "message")  # no NaN, huge integers, deep nests
+            except DataError as e:
+                await send.json({"type": "error", "message": str(e)})
+                continue
+            if not isinstance(data, dict):
                 await send.json({"type": "error", "message": "message is not a JSON object"})
                 continue
             kind = data.get("type")
