@@ -5,11 +5,12 @@ from mimika.studio.routers import (
     expressions,
     face,
     latent,
+    look,
     projects,
     speech,
 )
 
 ROUTERS = (face.router, expressions.router, projects.router, speech.router, export.router,
-           latent.router)
+           latent.router, look.router)
 
 __all__ = ["ROUTERS"]

@@ -15,7 +15,7 @@ from starlette.concurrency import run_in_threadpool
 from mimika.studio import speaking
 from mimika.studio.routers._deps import state_of
 from mimika.studio.routers.projects import _validate
-from mimika.studio.schemas import ExportRequest, SpeakRequest
+from mimika.studio.schemas import ExportRequest
 from mimika.studio.state import StudioState, gltf_bytes
 
 router = APIRouter(prefix="/api/export", tags=["export"])
@@ -36,20 +36,24 @@ def _track(st: StudioState, req: ExportRequest) -> tuple[Any, Any]:
 
             raise ParameterError("give a project or a pose (aus) to export")
         return AUTrack.constant(req.aus, n_frames=1, fps=req.fps), None
-    proj = _validate(req.project, "project")
+    proj = _validate(req.project, "project", st)
     tl = proj.timeline
-    blend = bool(proj.settings.get("blend"))
+    mix = speaking.mix_of(req.project, st)
     text = tl.speech.text.strip()
     if req.speech and text:
         from mimika.studio.routers.speech import _entry
 
-        sreq = SpeakRequest(text=text[:5000], lang=str(proj.settings.get("lang", "en")),
-                            fps=req.fps)
-        entry = _entry(st, sreq)
-        return speaking.entry_track(entry, tl, fps=req.fps, blend=blend), proj
+        entry = _entry(st, speaking.speak_request(text, proj, fps=req.fps))
+        return speaking.entry_track(entry, mix, fps=req.fps), proj
     from mimika.timeline import sample
 
-    return sample(tl, fps=req.fps, blend=blend, duration=max(tl.end, 1.0 / req.fps)), proj
+    return sample(tl, fps=req.fps, blend=mix.blend, disabled=mix.disabled, library=mix.library,
+                  duration=max(tl.end, 1.0 / req.fps)), proj
+
+
+def _rig(st: StudioState, req: ExportRequest, proj: Any) -> Any:
+    """The rig of the project's head (a pose: the request's head)."""
+    return st.rig(str(proj.settings["head"]) if proj is not None else req.head)
 
 
 def _one_at_a_time(work: Any) -> bytes:
@@ -68,8 +72,8 @@ async def export_gltf(req: ExportRequest, request: Request) -> Response:
     st = state_of(request)
 
     def work() -> bytes:
-        track, _ = _track(st, req)
-        return gltf_bytes(st.rig(), track, name=req.name)
+        track, proj = _track(st, req)
+        return gltf_bytes(_rig(st, req, proj), track, name=req.name)
 
     data = await run_in_threadpool(_one_at_a_time, work)
     return _attachment(data, "model/gltf-binary", f"{req.name}.glb")
@@ -107,7 +111,7 @@ async def export_mp4(req: ExportRequest, request: Request) -> Response:
             if name is not None and req.project is not None:
                 mod = importlib.import_module(name)
                 func = next(getattr(mod, f) for f in VIDEO_FUNCS if callable(getattr(mod, f, None)))
-                func(_validate(req.project, "project"), p)
+                func(_validate(req.project, "project", st), p)
                 return p.read_bytes()
             from mimika.studio.video import render_mp4
 
@@ -117,8 +121,7 @@ async def export_mp4(req: ExportRequest, request: Request) -> Response:
             if req.speech and text:
                 from mimika.studio.routers.speech import _entry
 
-                entry = _entry(st, SpeakRequest(text=text[:5000], fps=req.fps,
-                                                lang=str(proj.settings.get("lang", "en"))))
+                entry = _entry(st, speaking.speak_request(text, proj, fps=req.fps))
                 audio, sr = entry.audio()
             if track.n_frames < 2:  # a pose: one second of it
                 from mimika.tracks import AUTrack
@@ -127,7 +130,9 @@ async def export_mp4(req: ExportRequest, request: Request) -> Response:
                                 req.fps)
             size = tuple(proj.settings.get("size", (640, 480))) if proj else (640, 480)
             view = str(proj.settings.get("view", "front")) if proj else "front"
-            render_mp4(st.rig(), track, p, audio=audio, sr=sr, size=size, view=view)
+            look = str(proj.settings.get("look", "plain")) if proj else req.look
+            render_mp4(_rig(st, req, proj), track, p, audio=audio, sr=sr, size=size, view=view,
+                       look=look)
             return p.read_bytes()
 
     data = await run_in_threadpool(_one_at_a_time, work)
