@@ -14,20 +14,17 @@ import re
 import socket
 import threading
 import time
-from pathlib import Path
 
 import pytest
+
+from studio_helpers import TIMEOUT_MS
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--disable-sync", "--no-first-run",
         "--autoplay-policy=no-user-gesture-required"]
-#: the repository's node tools (glTF validator, three.js, axe-core): scripts/setup-node.sh
-AXE = Path(__file__).resolve().parents[1] / "tools" / "node_modules" / "axe-core" / "axe.min.js"
 #: Chromium's software GL reports stalls as console warnings, not errors; nothing to ignore
 READY = "window.mimikaStudio && window.mimikaStudio.ready === true"
-#: a loaded 2-core machine renders a frame in ~1 s; speech of a sentence takes seconds
-TIMEOUT_MS = 60_000
 
 
 
@@ -122,19 +119,3 @@ def open_studio(browser, server):
 @pytest.fixture
 def studio(open_studio):
     return open_studio()
-
-
-def weights(pg) -> dict[str, float]:
-    return pg.evaluate("mimikaStudio.weights()")
-
-
-def project_events(pg, channel: str = "face") -> list[dict]:
-    return pg.evaluate("(ch) => { const c = mimikaStudio.project.timeline.channels"
-                       ".find(c => c.name === ch); return c ? c.events : []; }", channel)
-
-
-def download_bytes(pg, click) -> tuple[str, bytes]:
-    """Run ``click()`` and return the download's suggested name and bytes."""
-    with pg.expect_download(timeout=TIMEOUT_MS * 3) as d:
-        click()
-    return d.value.suggested_filename, Path(d.value.path()).read_bytes()

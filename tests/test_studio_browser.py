@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from studio_pages import weights
+from studio_helpers import weights
 
 pytestmark = pytest.mark.browser
 pytest_plugins = ["studio_pages"]  # fixtures: server, browser, open_studio, studio

@@ -120,8 +120,8 @@ async function setProject(p, { name } = {}) {
   if (before !== plainText(p) + "|" + st.lang) forgetSpeech();
   showCount();
   if (st.head !== S.head) await useHead(st.head);
-  viewer.setLook(st.look);
-  setView(st.view, false);
+  if (st.look !== viewer.look.name) viewer.setLook(st.look);
+  if (st.view !== viewer.view) setView(st.view, false);
   runBlend();
   resample();
 }
@@ -146,17 +146,20 @@ function updateDirty() {
 }
 
 // -- undo / redo ---------------------------------------------------------------------------------
+// What undo restores: the project and the sliders (not the selection, the camera or playback).
 function snapshot() {
-  return { project: S.project, pose: panel ? panel.state() : { values: {}, split: [] }, sel: editor ? editor.selection() : null };
+  if (S.project && text() !== plainText(S.project)) syncText();
+  return { project: S.project, pose: panel ? panel.state() : { values: {}, split: [] } };
 }
 
 function commit() { syncText(); history.commit(); updateDirty(); }
 
 async function restore(state) {
   if (!state) return;
+  const sel = editor.selection();
   await setProject(state.project);
   panel.setState(state.pose);
-  if (state.sel) editor.reselect(state.sel.channel, state.sel.index);
+  if (sel) editor.reselect(sel.channel, sel.index);
   updateDirty();
 }
 async function undo() { await restore(history.undo()); }

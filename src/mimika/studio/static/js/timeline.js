@@ -9,7 +9,7 @@ const DIRS = {
   turn: ["left", "right", "up", "down", "ahead"], tilt: ["left", "right"], blink: ["both", "left", "right"],
 };
 const HEAD_KINDS = ["nod", "shake", "turn", "tilt"];
-const MIN_DUR = 0.1, SNAP = 0.02;
+const MIN_DUR = 0.1, SNAP = 0.02, MAX_TIME = 600;
 
 export const TRACKS = [
   { id: "speech", label: "Speech", channel: null },
@@ -196,10 +196,12 @@ export class TimelineEditor {
     return [lo, hi];
   }
 
-  // Move and/or resize ev inside its room; returns true when it changed.
+  // Move ev (start changes) or resize it from its start (start unchanged), inside its room;
+  // returns true when it changed.
   place(channel, ev, start, duration) {
     const [lo, hi] = this.room(channel, ev);
-    const d = r3(clamp(duration, MIN_DUR, Math.max(MIN_DUR, hi - lo)));
+    const resize = start === ev.start;
+    const d = r3(clamp(duration, MIN_DUR, Math.max(MIN_DUR, resize ? hi - ev.start : hi - lo)));
     const s = r3(clamp(start, lo, hi - d));
     if (s === ev.start && d === ev.duration) return false;
     ev.start = s; ev.duration = d;
@@ -365,17 +367,17 @@ export class TimelineEditor {
     const [lo, hi] = this.room(channel, ev);
     const update = () => { delete ev.anchor; delete ev.at; this.fitRamps(ev); this.changed(); };
     // a slider and a typed number for one value; set(x) applies it inside the limits
-    const value = (label, key, min, max, step, dflt, set) => {
+    const value = (label, key, min, max, step, dflt, set, typedMax = max) => {
       const v = ev[key] ?? dflt;
       const id = `p-${key}`;
-      const num = el("input", { type: "number", min, max, step, value: fmt(v), "aria-label": `${label} (number)`, id: `${id}-num` });
+      const num = el("input", { type: "number", min, max: typedMax, step, value: fmt(v), "aria-label": `${label} (number)`, id: `${id}-num` });
       const inp = el("input", { type: "range", min, max, step, value: v, id, "aria-valuetext": fmt(v),
         oninput: (e) => { num.value = fmt(e.target.value); e.target.setAttribute("aria-valuetext", fmt(e.target.value)); },
         onchange: (e) => { set(Number(e.target.value)); update(); } });
       num.addEventListener("change", () => {
         const x = Number(num.value);
         if (!Number.isFinite(x)) { num.value = fmt(v); return; }
-        set(clamp(x, min, max));
+        set(clamp(x, min, typedMax));
         update();
       });
       return el("div", { class: "prm" }, el("label", { for: id }, label), inp, num);
@@ -396,9 +398,12 @@ export class TimelineEditor {
     } else if (DIRS[ev.kind]) body.append(select("direction", DIRS[ev.kind], ev.name, (n) => { ev.name = n; }, "p-name"));
     // start and duration stay inside the free room: no control can make triggers overlap
     const maxStart = Number.isFinite(hi) ? hi - ev.duration : Math.max(ev.start + 5, this.end() + 2);
-    body.append(value("start", "start", r3(lo), r3(Math.max(lo, maxStart)), 0.01, 0, (x) => { this.place(channel, ev, x, ev.duration); }));
+    const free = (x) => (Number.isFinite(hi) ? x : MAX_TIME);  // typed values may go further
+    body.append(value("start", "start", r3(lo), r3(Math.max(lo, maxStart)), 0.01, 0, (x) => { this.place(channel, ev, x, ev.duration); },
+      r3(free(Math.max(lo, hi - ev.duration)))));
     const maxDur = Number.isFinite(hi) ? hi - ev.start : Math.max(ev.duration * 2, 4);
-    body.append(value("duration", "duration", MIN_DUR, r3(Math.max(MIN_DUR, maxDur)), 0.01, 1, (x) => { this.place(channel, ev, ev.start, x); }));
+    body.append(value("duration", "duration", MIN_DUR, r3(Math.max(MIN_DUR, maxDur)), 0.01, 1, (x) => { this.place(channel, ev, ev.start, x); },
+      r3(free(Math.max(MIN_DUR, hi - ev.start)))));
     body.append(value("intensity", "intensity", 0, 1, 0.01, 1, (x) => { ev.intensity = x; }));
     body.append(value("ease-in", "onset", 0, ev.duration, 0.01, 0, (x) => { ev.onset = x; }));
     body.append(value("ease-out", "offset", 0, ev.duration, 0.01, 0, (x) => { ev.offset = x; }));
