@@ -24,6 +24,9 @@ ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--disable-sync", "--no-first-run",
         "--autoplay-policy=no-user-gesture-required"]
 #: Chromium's software GL reports stalls as console warnings, not errors; nothing to ignore
+#: what a message for people must not contain: server paths, command-line flags, regexes
+JARGON = re.compile(r"(?:^|[\s'\"(])(?:/[\w.-]+){2,}|(?:^|\s)--[a-z]|\^\[|\]\*\$|\(\?:|\\[dws]"
+                    r"|Traceback|Error:|\w+Error\b")
 READY = "window.mimikaStudio && window.mimikaStudio.ready === true"
 
 
@@ -110,10 +113,15 @@ def open_studio(browser, server):
         return pg
 
     yield _open
+    shown: list[str] = []
     for ctx in contexts:
+        for pg in ctx.pages:
+            shown += pg.evaluate("window.__mimikaToasts || []")
         ctx.close()
     bad = problems.unexpected()
     assert not bad, bad
+    jargon = [t for t in shown if JARGON.search(t)]
+    assert not jargon, f"messages with server paths, command-line flags or regexes: {jargon}"
 
 
 @pytest.fixture

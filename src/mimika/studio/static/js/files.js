@@ -29,7 +29,7 @@ export class Files {
 
   async save() {
     const name = this.projectName();
-    if (!name) return;
+    if (!name || !this.app.expressionsKnown()) return;
     this.app.syncText();
     const doc = JSON.parse(JSON.stringify(this.app.S.project));
     const r = await api(`/api/projects/${encodeURIComponent(name)}`, { method: "PUT", body: doc }).catch(() => null);
@@ -126,7 +126,7 @@ export class Files {
       toast(`${sentence(S.status.features.mp4_reason || "MP4 export isn't available")} Export glTF or CSV instead.`);
       return;
     }
-    if (!this.app.textFits()) return;
+    if (!this.app.textFits() || !this.app.expressionsKnown()) return;
     const body = this.body();
     if (kind === "csv") body.format = $("csv-format").value;
     const ext = { gltf: "glb", csv: "csv", mp4: "mp4" }[kind];

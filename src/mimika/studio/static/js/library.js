@@ -8,8 +8,8 @@ const EXPR_RE = /^[a-z0-9][a-z0-9_-]*(\/[a-z0-9][a-z0-9_-]*)?$/;
 export const exprKey = (name) => name.trim().toLowerCase().replace(/\s+/g, "-");
 
 export class LibraryPanel {
-  constructor({ list, filter, nameInput, saveBtn, onApply, onAdd, getPose }) {
-    Object.assign(this, { list, filter, nameInput, saveBtn, onApply, onAdd, getPose });
+  constructor({ list, filter, nameInput, saveBtn, onApply, onAdd, getPose, onRefresh = () => {} }) {
+    Object.assign(this, { list, filter, nameInput, saveBtn, onApply, onAdd, getPose, onRefresh });
     this.items = [];
     filter.addEventListener("input", () => this.render());
     saveBtn.addEventListener("click", () => this.save().catch(() => {}));
@@ -21,6 +21,7 @@ export class LibraryPanel {
     const data = await api("/api/expressions");
     this.items = data.expressions;
     this.render();
+    this.onRefresh();
     return this.items;
   }
 

@@ -120,6 +120,7 @@ async function setProject(p, { name } = {}) {
   if (before !== plainText(p) + "|" + st.lang) forgetSpeech();
   showCount();
   if (st.head !== S.head) await useHead(st.head);
+  if (editor.missing().length) expressionsKnown();
   if (st.look !== viewer.look.name) viewer.setLook(st.look);
   if (st.view !== viewer.view) setView(st.view, false);
   runBlend();
@@ -195,8 +196,19 @@ function setView(view, record = true) {
 }
 
 // -- timeline and playback -----------------------------------------------------------------------
+// A trigger naming an expression the library lacks: say which, select it; true if none.
+function expressionsKnown() {
+  const lost = editor.missing();
+  if (!lost.length) return true;
+  const { channel, index, ev } = lost[0];
+  toast(`${editor.trackLabel(channel)} track, trigger ${index + 1} (at ${fmt(ev.start)} s) uses “${ev.name}”, which is not in your library. Choose another expression for it in the Trigger panel, or save one under that name.`);
+  editor.select({ channel, ev });
+  return false;
+}
+
 const resample = debounce(async () => {
   syncText();
+  if (editor.missing().length) return;  // the server would refuse the timeline: see expressionsKnown()
   const r = await api("/api/timeline/sample", { method: "POST", body: { project: S.project, fps: 30 }, quiet: true }).catch((e) => {
     if (e.status === 422) toast(e.message);
     return null;
@@ -227,7 +239,7 @@ async function speak() {
   syncText();
   const t = text().trim();
   if (!t) { toast("Type something to speak first."); $("speech-text").focus(); return; }
-  if (!textFits()) return;
+  if (!textFits() || !expressionsKnown()) return;
   setSource("speaking");
   $("latency").textContent = "…";
   await player.speak({ text: t, lang: $("lang").value, project: S.project, blend: !!S.project.settings.blend });
@@ -245,6 +257,7 @@ async function remix(key) {
 }
 
 async function play() {
+  if (!expressionsKnown()) return;
   setSource("playing");
   // the playhead still where the last playback ended: play again from the start
   await player.play(editor.time === S.endedAt ? 0 : editor.time, remix);
@@ -325,7 +338,8 @@ async function main() {
   const info = await api(`/api/head?name=${encodeURIComponent(heads.default)}`);
   panel = new AUPanel($("au-groups"), info.groups, { onChange: onPose, onCommit: commit });
   library = new LibraryPanel({ list: $("expr-list"), filter: $("expr-filter"), nameInput: $("expr-name"), saveBtn: $("btn-expr-save"),
-    onApply: (e) => { panel.setPose(e.aus); commit(); }, onAdd: (e) => editor.addExpression(e.name), getPose: () => panel.pose() });
+    onApply: (e) => { panel.setPose(e.aus); commit(); }, onAdd: (e) => editor.addExpression(e.name), getPose: () => panel.pose(),
+    onRefresh: () => { if (editor && editor.project) { editor.render(); editor.renderParams(); resample(); } } });
   blender = new BlenderPanel({ list: $("rules"), filter: $("rule-filter"), trace: $("trace"),
     onChange: (off) => { S.project.settings.blender_off = off; runBlend(); resample(); commit(); } });
   player = new Player({ audio: $("audio"),
@@ -336,8 +350,8 @@ async function main() {
   editor = new TimelineEditor({ heads: $("tl-heads"), scroll: $("tl-scroll"), canvas: $("tl-canvas"), ruler: $("tl-ruler"),
     lanes: $("tl-lanes"), playhead: $("tl-playhead"), knob: $("tl-knob"), params: $("param-body"), easings: status.easings,
     onChange: () => resample(), onSeek: seek, onCommit: commit,
-    expressionNames: () => library.names(), defaultExpression: () => "happiness" });
-  files = new Files({ S, syncText, text, textFits, loadProject, markSaved, currentPose });
+    expressionNames: () => library.names(), hasExpression: (n) => library.has(n), defaultExpression: () => "happiness" });
+  files = new Files({ S, syncText, text, textFits, expressionsKnown, loadProject, markSaved, currentPose });
   history = new History(snapshot, { onChange: (h) => { $("btn-undo").disabled = !h.canUndo; $("btn-redo").disabled = !h.canRedo; } });
   S.head = heads.default;
   $("head-select").value = S.head;

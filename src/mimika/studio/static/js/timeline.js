@@ -153,6 +153,16 @@ export class TimelineEditor {
     if (focused && this.evEls.has(focused[0])) this.evEls.get(focused[0]).focus({ preventScroll: true });
   }
 
+  // Triggers naming an expression the library does not have: [{channel, index, ev}].
+  missing() {
+    const out = [];
+    if (!this.project) return out;
+    for (const c of this.project.timeline.channels) {
+      c.events.forEach((ev, index) => { if (ev.kind === "expression" && !this.hasExpression(ev.name)) out.push({ channel: c.name, index, ev }); });
+    }
+    return out;
+  }
+
   label(ev) {
     if (ev.kind === "expression") return ev.name;
     if (ev.kind === "aus") return ev.aus.map(([c, v]) => `${c}=${fmt(v)}`).join(" ");
@@ -169,9 +179,10 @@ export class TimelineEditor {
     const a = (on / d) * 100, b = 100 - (off / d) * 100;
     const shade = `linear-gradient(90deg, rgba(0,0,0,.45) 0%, rgba(0,0,0,${0.45 * (1 - k)}) ${a}%, rgba(0,0,0,${0.45 * (1 - k)}) ${b}%, rgba(0,0,0,.45) 100%)`;
     const selected = !!(this.sel && this.sel.ev === ev);
+    const lost = ev.kind === "expression" && !this.hasExpression(ev.name);
     const div = el("div", {
-      class: `ev k-${ev.kind}${selected ? " sel" : ""}`, tabindex: 0, role: "button", "aria-pressed": String(selected),
-      "aria-label": this.describe(channel, ev),
+      class: `ev k-${ev.kind}${selected ? " sel" : ""}${lost ? " missing" : ""}`, tabindex: 0, role: "button", "aria-pressed": String(selected),
+      "aria-label": this.describe(channel, ev) + (lost ? ", not in your library" : ""),
       "aria-keyshortcuts": "ArrowLeft ArrowRight Alt+ArrowLeft Alt+ArrowRight Delete",
       style: `left:${ev.start * this.pps}px;width:${Math.max(6, d * this.pps)}px`,
       title: `${this.label(ev)} — ${fmt(ev.start)}–${fmt(ev.start + d)} s, intensity ${fmt(k)}. Drag to move, drag an edge to resize; ←/→ move, Alt+←/→ resize, Delete removes.`,

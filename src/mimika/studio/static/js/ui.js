@@ -19,6 +19,7 @@ export function el(tag, attrs = {}, ...children) {
 
 // A toast in the lower right. ms = 0 keeps it until closed; action = {label, run}.
 export function toast(message, kind = "error", ms = 8000, action = null) {
+  (window.__mimikaToasts ||= []).push(String(message));  // read by the browser tests
   const box = document.getElementById("toasts");
   const t = el("div", { class: `toast ${kind}`, role: kind === "error" ? "alert" : "status" },
     el("span", { class: "msg" }, message));
