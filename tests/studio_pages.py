@@ -98,10 +98,12 @@ def open_studio(browser, server):
     contexts = []
     problems = _Problems()
 
-    def _open(width: int = 1440, height: int = 900):
+    def _open(width: int = 1440, height: int = 900, *, init_script: str | None = None):
         ctx = browser.new_context(viewport={"width": width, "height": height},
                                   accept_downloads=True)
         contexts.append(ctx)
+        if init_script:
+            ctx.add_init_script(init_script)
         pg = ctx.new_page()
         pg.set_default_timeout(TIMEOUT_MS)
         pg.on("pageerror", lambda e: problems.seen.append(f"uncaught: {e}"))

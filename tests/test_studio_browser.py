@@ -32,7 +32,7 @@ def test_au12_slider_moves_the_morph_target(page):
     page.wait_for_function("mimikaStudio.weights().AU12 < 0.01")
     # left/right toggle splits AU12 into AU12L and AU12R
     page.locator('input[type=range][data-code="AU15"]').fill("0")
-    page.click("button[aria-label='AU12 left and right separately']")
+    page.click("button[aria-label='AU12 L/R (left and right separately)']")
     page.locator('input[type=range][data-code="AU12L"]').fill("0.5")
     page.wait_for_function("mimikaStudio.weights().AU12L > 0.49")
     assert weights(page)["AU12R"] == pytest.approx(0.8, abs=0.01)

@@ -46,7 +46,7 @@ def test_typed_values_and_facs_letters(studio):
     pg.keyboard.press("b")
     pg.wait_for_function("Math.abs(mimikaStudio.weights().AU12 - 0.4) < 1e-6")
     # sided AUs: both sides take letters
-    pg.click("button[aria-label='AU12 left and right separately']")
+    pg.click("button[aria-label='AU12 L/R (left and right separately)']")
     pg.fill('input.val[data-code="AU12L"]', "D")
     pg.press('input.val[data-code="AU12L"]', "Enter")
     pg.wait_for_function("Math.abs(mimikaStudio.weights().AU12L - 0.8) < 1e-6")

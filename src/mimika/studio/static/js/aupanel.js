@@ -78,7 +78,7 @@ export class AUPanel {
     row.innerHTML = "";
     const split = this.split.has(code);
     const btn = au.sided ? el("button", { class: "side small", "aria-pressed": String(split),
-      title: "left and right separately", "aria-label": `${code} left and right separately`,
+      title: "left and right separately", "aria-label": `${code} L/R (left and right separately)`,
       onclick: () => { this.toggleSide(code); this.onCommit(); } }, "L/R") : null;
     row.append(el("div", { class: "au-label" },
       el("span", {}, el("b", {}, code), el("span", { class: "name" }, au.name)), btn));

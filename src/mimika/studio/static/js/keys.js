@@ -55,6 +55,16 @@ export function setupMenus() {
     for (const m of menus) if (m.open && !m.contains(e.target)) m.open = false;
   });
   for (const m of menus) {
+    const body = m.querySelector(".menu-body");
+    m.addEventListener("toggle", () => {  // keep the open menu inside the window
+      if (!m.open) return;
+      body.style.left = "0px";
+      const r = body.getBoundingClientRect(), pad = 8;
+      let dx = 0;
+      if (r.right > window.innerWidth - pad) dx = window.innerWidth - pad - r.right;
+      if (r.left + dx < pad) dx = pad - r.left;
+      body.style.left = `${dx}px`;
+    });
     m.addEventListener("keydown", (e) => {
       if (e.key === "Escape" && m.open) { m.open = false; m.querySelector("summary").focus(); }
     });

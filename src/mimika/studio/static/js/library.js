@@ -37,7 +37,7 @@ export class LibraryPanel {
       const li = el("li", { class: e.builtin ? "" : "user", dataset: { name: e.name }, title: e.description || aus },
         el("span", { class: "nm" }, e.name, el("small", {}, aus)),
         el("button", { onclick: () => this.onApply(e), title: "set the sliders to it", "aria-label": `Apply ${e.name}` }, "Apply"),
-        el("button", { onclick: () => this.onAdd(e), title: "add it to the Expressions track at the playhead", "aria-label": `Add ${e.name} to the timeline` }, "+TL"),
+        el("button", { onclick: () => this.onAdd(e), title: "add it to the Expressions track at the playhead", "aria-label": `+TL: add ${e.name} to the timeline` }, "+TL"),
         e.builtin ? null : el("button", { onclick: () => this.remove(e.name).catch(() => {}), title: "delete it from your library", "aria-label": `Delete ${e.name}` }, "✕"));
       this.list.append(li);
     }

@@ -397,6 +397,7 @@ async function main() {
   setupKeys({ save: () => files.save(), undo, redo, remove: () => editor.remove(), togglePlay, hasSelection: () => !!editor.sel });
   window.addEventListener("beforeunload", (e) => { if (dirty()) { e.preventDefault(); e.returnValue = ""; } });
   requestAnimationFrame(loop);
+  window.mimikaStudio.readyAt = performance.now();
   window.mimikaStudio.ready = true;
 }
 

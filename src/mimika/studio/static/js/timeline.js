@@ -42,6 +42,7 @@ export class TimelineEditor {
       this.scrub(e, e.target);
     });
     this.knob.addEventListener("keydown", (e) => this.knobKey(e));
+    this.scroll.addEventListener("scroll", () => { this.heads.scrollTop = this.scroll.scrollTop; });
   }
 
   setProject(project) { this.project = project; this.sel = null; this.render(); this.renderParams(); }
