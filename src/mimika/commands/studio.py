@@ -56,7 +56,9 @@ def register(sub) -> None:
                    help="address to bind (default 127.0.0.1: this computer only)")
     q.add_argument("--projects", metavar="DIR",
                    help="folder of project files (default: ~/.local/share/mimika/projects)")
-    q.add_argument("--head", default="builtin", choices=("builtin", "ict"))
+    q.add_argument("--head", default="builtin", metavar="NAME",
+                   help="the head the page opens with: a name from 'mimika heads' (default "
+                        "builtin); the page switches heads without a restart")
     q.add_argument("--library", metavar="FILE",
                    help="user expression library (default: ~/.local/share/mimika/expressions.json)")
     q.add_argument("--no-browser", action="store_true", help="do not open a browser window")

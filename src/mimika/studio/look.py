@@ -38,9 +38,8 @@ def look_info() -> dict[str, Any]:
         "looks": looks,
         "materials": {k: {**asdict(m), "color": list(m.color), "scatter": list(m.scatter)}
                       for k, m in load_materials().items()},
-        "skin": {"materials": list(SKIN_MATERIALS), "mix": list(sp.mix),
-                 "roughness": sp.roughness, "specular": sp.specular,
-                 "sigma_cm": float(sum(s * s for s in sp.sigma_cm) ** 0.5)},
+        "skin": {"materials": list(SKIN_MATERIALS), "roughness": sp.roughness,
+                 "specular": sp.specular},
         "backface": BACKFACE,
         "fov": FOV_Y,
         "views": dict(VIEW_ANGLES),

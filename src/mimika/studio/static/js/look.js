@@ -4,9 +4,10 @@
 // Every material the GLB carries stays a MeshStandardMaterial — so base-colour, normal and
 // alpha textures, alpha modes, skinning and morph targets keep working — but its lighting is
 // replaced by the renderer's: wrap diffuse with a scatter tint and Blinn–Phong specular
-// (render/shaders/mesh.frag.glsl), or for skin in the news look the skin shader's
-// Torrance–Sparrow/Beckmann specular and a per-channel softened diffuse standing in for its
-// texture-space blur (render/shaders/skin_final.frag.glsl). Tone curve as the renderer's.
+// (render/shaders/mesh.frag.glsl), or for skin in the news look the skin shader's diffuse and
+// Torrance–Sparrow/Beckmann specular (render/shaders/skin_final.frag.glsl). The skin shader's
+// texture-space blur of the light (σ ≈ 0.6 cm) is left out: on mimika's heads it changes the
+// face by about 1/255 on average (scripts/studio_look_compare.py). Tone curve as the renderer's.
 import * as THREE from "three";
 
 const v3 = (a) => new THREE.Vector3(...a);
@@ -21,7 +22,7 @@ uniform float mk_exposure; uniform float mk_backface;
 uniform float mk_specular; uniform float mk_shininess; uniform float mk_wrap; uniform vec3 mk_scatter;
 uniform float mk_glass;      // 1: glass, premultiplied (specular stays where alpha is 0)
 uniform float mk_skin;       // 1: the skin shader's model (news look, skin materials)
-uniform vec3 mk_mix; uniform float mk_roughness; uniform float mk_skin_spec; uniform float mk_blur_wrap;
+uniform float mk_roughness; uniform float mk_skin_spec;
 
 vec3 mk_wrapped(vec3 n, vec3 l, vec3 c, float wrap) {
   float ndl = dot(n, l);
@@ -58,8 +59,7 @@ vec3 mk_shade(vec3 base, vec3 n, vec3 v, float alpha) {
   float facing = gl_FrontFacing ? 1.0 : mk_backface;
   vec3 c;
   if (mk_skin > 0.5) {
-    vec3 irr = mix(mk_skin_diffuse(n, mk_wrap), mk_skin_diffuse(n, mk_wrap + mk_blur_wrap), mk_mix);
-    c = base * irr + mk_beckmann(n, v, mk_key_dir, mk_key_col) + mk_beckmann(n, v, mk_fill_dir, mk_fill_col)
+    c = base * mk_skin_diffuse(n, mk_wrap) + mk_beckmann(n, v, mk_key_dir, mk_key_col) + mk_beckmann(n, v, mk_fill_dir, mk_fill_col)
       + mk_beckmann(n, v, mk_rim_dir, mk_rim_col);
   } else {
     float a = mk_glass > 0.5 ? alpha : 1.0;
@@ -145,7 +145,6 @@ export class Look {
     }
     this.lights.mk_exposure = { value: 1 };
     this.lights.mk_backface = { value: info.backface };
-    this.lights.mk_news = { value: 0 };
     this.skinMaterials = [];
     this.bgUniforms = { u_top: { value: new THREE.Vector3() }, u_bottom: { value: new THREE.Vector3() },
       u_glow: { value: new THREE.Vector3() }, u_aspect: { value: 1 } };
@@ -215,8 +214,8 @@ export class Look {
     const mk = {
       mk_specular: { value: p.specular }, mk_shininess: { value: p.shininess }, mk_wrap: { value: p.wrap },
       mk_scatter: { value: col(p.scatter) }, mk_glass: { value: glass ? 1 : 0 },
-      mk_skin: { value: 0 }, mk_mix: { value: v3(this.info.skin.mix) }, mk_roughness: { value: this.info.skin.roughness },
-      mk_skin_spec: { value: p.specular * this.info.skin.specular }, mk_blur_wrap: { value: SKIN_BLUR_WRAP },
+      mk_skin: { value: 0 }, mk_roughness: { value: this.info.skin.roughness },
+      mk_skin_spec: { value: p.specular * this.info.skin.specular },
     };
     material.userData.mk = mk;
     if (p.skin) { this.skinMaterials.push(material); mk.mk_skin.value = this.info.looks[this.name].skin_shader ? 1 : 0; }
@@ -248,7 +247,3 @@ export class Look {
     if (this.hasDesk) renderer.render(this.desk, this.camera);
   }
 }
-
-// How much wider the wrap of the skin shader's blurred light reaches (its texture-space blur of
-// ≈ 0.6 cm softens the terminator): tuned by comparing the view with the renderer's pictures.
-export const SKIN_BLUR_WRAP = 0.35;

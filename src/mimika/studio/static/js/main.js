@@ -144,6 +144,7 @@ function dirty() { syncText(); return S.saved !== null && JSON.stringify(S.proje
 function updateDirty() {
   const d = S.saved !== null && JSON.stringify(S.project) !== S.saved;
   document.title = `${d ? "• " : ""}${$("project-name").value.trim() || "untitled"} — mimika studio`;
+  if (!S.loadingHead) $("status-line").textContent = d ? "unsaved changes" : `mimika ${S.status.version}`;
 }
 
 // -- undo / redo ---------------------------------------------------------------------------------
@@ -170,6 +171,7 @@ async function redo() { await restore(history.redo()); }
 async function useHead(name) {
   const sel = $("head-select");
   sel.disabled = true;
+  S.loadingHead = true;
   $("status-line").textContent = `loading the ${name} head…`;
   try {
     const q = `?name=${encodeURIComponent(name)}`;
@@ -185,7 +187,8 @@ async function useHead(name) {
     throw new Error(`The ${name} head could not be loaded: ${e.message}`);
   } finally {
     sel.disabled = false;
-    $("status-line").textContent = `head: ${S.head} · mimika ${S.status.version}`;
+    S.loadingHead = false;
+    updateDirty();
   }
 }
 
@@ -206,7 +209,7 @@ function expressionsKnown() {
   return false;
 }
 
-const resample = debounce(async () => {
+async function sampleTimeline() {
   syncText();
   if (editor.missing().length) return;  // the server would refuse the timeline: see expressionsKnown()
   const r = await api("/api/timeline/sample", { method: "POST", body: { project: S.project, fps: 30 }, quiet: true }).catch((e) => {
@@ -214,7 +217,14 @@ const resample = debounce(async () => {
     return null;
   });
   if (r) { player.tl = r; if (S.source === "timeline" && player.mode === "idle") viewer.apply(player.frameAt(editor.time)); }
-}, 120);
+}
+const resample = debounce(() => { S.sampling = sampleTimeline(); }, 120);
+
+// The timeline as edited so far (an edit may still be waiting to be sampled).
+async function sampled() {
+  resample.flush();
+  await S.sampling;
+}
 
 function seek(t) {
   if (player.mode !== "idle") player.stop();
@@ -258,6 +268,7 @@ async function remix(key) {
 
 async function play() {
   if (!expressionsKnown()) return;
+  await sampled();
   setSource("playing");
   // the playhead still where the last playback ended: play again from the start
   await player.play(editor.time === S.endedAt ? 0 : editor.time, remix);
@@ -357,7 +368,6 @@ async function main() {
   $("head-select").value = S.head;
   await Promise.all([viewer.load(`/api/head.glb?name=${encodeURIComponent(S.head)}`, info), library.refresh(), files.refreshList(), blender.load()]);
   await setProject(emptyProject(), { name: "" });
-  $("status-line").textContent = `head: ${S.head} · mimika ${status.version}`;
   history.reset();
   markSaved(S.project);
   latent = new LatentPanel({ status: $("latent-status"), box: $("latent-sliders"), labelRow: $("latent-label-row"),

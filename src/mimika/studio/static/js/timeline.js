@@ -120,7 +120,7 @@ export class TimelineEditor {
   render() {
     const focused = [...this.evEls].find(([, d]) => d === document.activeElement);
     const tracks = this.tracks();
-    const width = (Math.max(this.end(), 8) + 4) * this.pps;
+    const width = Math.max((Math.max(this.end(), 8) + 4) * this.pps, this.scroll.clientWidth);
     this.canvas.style.width = `${width}px`;
     this.ruler.innerHTML = "";
     const step = this.pps >= 160 ? 0.5 : this.pps >= 60 ? 1 : 2;

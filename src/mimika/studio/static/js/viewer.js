@@ -205,6 +205,29 @@ export class Viewer {
     return out;
   }
 
+  // A PNG data URL of the view framed like the renderer's w×h pictures (the camera the
+  // screen shows is kept); used to compare the look with mimika's renderer.
+  still(w, h) {
+    if (!this.renderer) return null;
+    const pos = this.camera.position.clone(), tgt = this.controls.target.clone(), aspect = this.camera.aspect;
+    const ratio = this.renderer.getPixelRatio();
+    this.renderer.setPixelRatio(1);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.setView(this.view);
+    this.look.render(this.renderer, this.scene, this.camera);
+    const url = this.canvas.toDataURL("image/png");
+    this.renderer.setPixelRatio(ratio);
+    this.camera.aspect = aspect;
+    this.camera.position.copy(pos);
+    this.controls.target.copy(tgt);
+    this.camera.lookAt(tgt);
+    this.resize();
+    this.render();
+    return url;
+  }
+
   // Draw only when something changed (software GL on a busy machine needs its CPU back).
   render() {
     if (!this.renderer || !this.look) return;
