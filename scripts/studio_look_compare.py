@@ -25,7 +25,6 @@ from PIL import Image
 
 POSES = {"neutral": {}, "smile": {"AU06": 0.7, "AU12": 1.0},
          "surprise": {"AU01": 0.8, "AU02": 0.8, "AU05": 0.6, "AU26": 0.7}}
-W, H = 480, 360
 
 
 def serve():
@@ -53,7 +52,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("-o", "--out", type=Path, default=Path("out/look"))
     ap.add_argument("--head", default="builtin")
+    ap.add_argument("--size", default="480x360", help="picture size WxH (default 480x360)")
+    ap.add_argument("--poses", default=",".join(POSES), help=f"of {', '.join(POSES)}")
     args = ap.parse_args()
+    W, H = (int(x) for x in args.size.split("x"))
+    poses = {k: POSES[k] for k in args.poses.split(",")}
     args.out.mkdir(parents=True, exist_ok=True)
     from playwright.sync_api import sync_playwright
 
@@ -70,7 +73,7 @@ def main() -> None:
         for look in ("plain", "news"):
             pg.select_option("#look-select", look)
             rows, diffs, face = [], [], []
-            for name, aus in POSES.items():
+            for name, aus in poses.items():
                 pg.evaluate("(aus) => { mimikaStudio.panel.setPose(aus); "
                             "mimikaStudio.viewer.apply(aus); }", aus)
                 shot = pg.evaluate(f"mimikaStudio.viewer.still({W}, {H})")

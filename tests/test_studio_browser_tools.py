@@ -168,3 +168,44 @@ def test_speak_runs_the_behaviour_layers(studio):
     pg.wait_for_function("mimikaStudio.player.key && mimikaStudio.player.mode === 'idle'")
     chans = set(pg.evaluate("mimikaStudio.player.segments.flatMap(s => s.channels)"))
     assert not chans & {"AU45", "AU06", "AU01", "AU51", "AU52", "AU53", "AU54", "AU61", "AU62"}
+
+
+def test_viewer_draws_the_materials_a_glb_carries(browser, server):
+    """A character's GLB (textures, normal map, hair cards with alpha) keeps its materials in
+    the live view, with mimika's lighting on top, and its morph targets still move."""
+    import base64
+
+    from studio_helpers import textured_glb
+
+    ctx = browser.new_context(viewport={"width": 1024, "height": 768})
+    try:
+        pg = ctx.new_page()
+        errors = []
+        pg.on("pageerror", lambda e: errors.append(str(e)))
+        pg.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+
+        def textured(route):
+            route.fulfill(body=textured_glb(route.fetch().body()),
+                          headers={"content-type": "model/gltf-binary"})
+
+        pg.route("**/api/head.glb*", textured)
+        pg.goto(server["url"])
+        pg.wait_for_function("window.mimikaStudio && mimikaStudio.ready === true",
+                             timeout=120_000)
+        mats = pg.evaluate("""(() => { const out = {};
+          mimikaStudio.viewer.root.traverse(o => { if (o.isMesh)
+            for (const m of [].concat(o.material)) out[m.name] = {map: !!m.map,
+              normalMap: !!m.normalMap, a2c: m.alphaToCoverage, transparent: m.transparent,
+              skinned: !!o.isSkinnedMesh}; });
+          return out; })()""")
+        assert mats["skin"]["map"] and mats["skin"]["normalMap"] and mats["skin"]["skinned"]
+        assert mats["hair"]["map"] and mats["hair"]["a2c"] and not mats["hair"]["transparent"]
+        shot = pg.evaluate("mimikaStudio.viewer.still(320, 240)")
+        img = _png(base64.b64decode(shot.split(",", 1)[1])).astype(int)
+        cheek = img[150:170, 130:190].reshape(-1, 3).mean(0)
+        assert cheek[1] > 2 * cheek[0] and cheek[1] > 2 * cheek[2]  # the green texture, lit
+        pg.evaluate("mimikaStudio.panel.setPose({AU12: 1})")
+        pg.wait_for_function("mimikaStudio.weights().AU12 > 0.99")
+        assert errors == []
+    finally:
+        ctx.close()

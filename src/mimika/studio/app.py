@@ -193,9 +193,9 @@ def _warm(state: StudioState) -> None:
     """Load the head, build its GLB and start espeak-ng so the first request is fast."""
     try:
         state.glb()
-        from mimika.studio.speaking import synth_segment
+        from mimika.studio.speaking import warm
 
-        synth_segment(state, "Ready.", 0, 0.0, lang="en", rate=175, fps=30.0)
+        warm(state)
         log.info("studio: warm")
     except MimikaError as e:  # reported again on first use
         log.warning("studio: warm-up failed: %s", e)

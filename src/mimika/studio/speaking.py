@@ -49,6 +49,14 @@ def synth_segment(state: StudioState, text: str, char0: int, t0: float, *, lang:
     return SpeechSegment(text, char0, t0, utt, mouth_track(utt, fps=fps))
 
 
+def warm(state: StudioState) -> None:
+    """Start espeak-ng and load the behaviour layers' data, so the first Speak is quick."""
+    from mimika.studio.behaviour import LAYERS, behaviour_track
+
+    seg = synth_segment(state, "Good evening.", 0, 0.0, lang="en", rate=175, fps=30.0)
+    behaviour_track(seg.utterance, fps=30.0, layers=LAYERS)
+
+
 def synth_all(state: StudioState, entry: SpeechEntry, *, fps: float) -> SpeechEntry:
     """Fill ``entry`` with every sentence of its text (for the non-streaming endpoints)."""
     t0 = 0.0
