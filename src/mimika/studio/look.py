@@ -43,7 +43,22 @@ def look_info() -> dict[str, Any]:
         "backface": BACKFACE,
         "fov": FOV_Y,
         "views": dict(VIEW_ANGLES),
+        "shaders": {name: _shader(f"{name}.glsl") for name in SHADERS},
     }
+
+
+#: the renderer's shaders the page runs as they are (backdrops, desk, the skin's light)
+SHADERS = ("background.vert", "background.frag", "studio.frag", "desk.frag", "lights",
+           "skin_light")
+
+
+def _shader(name: str) -> str:
+    """The source of ``render/shaders/name`` without its ``#include`` lines (the page joins
+    ``lights`` and ``skin_light`` itself)."""
+    from importlib import resources
+
+    text = resources.files("mimika.render").joinpath(f"shaders/{name}").read_text("utf-8")
+    return "\n".join(x for x in text.splitlines() if not x.startswith("#include"))
 
 
 def renderer(rig: Any, look: str, size: tuple[int, int]) -> Any:

@@ -99,11 +99,6 @@ def mix_of(project: dict[str, Any] | None, state: StudioState | None = None, *,
                state.library() if state is not None else None)
 
 
-def timeline_of(project: dict[str, Any] | None) -> Any:
-    """The validated timeline of a project document (None for none)."""
-    return mix_of(project).timeline
-
-
 def segment_behaviour(segments: list[SpeechSegment], index: int, mix: Mix, *, fps: float
                       ) -> Any:
     """Behaviour track of sentence ``index`` (cached; sentences join without a jump)."""

@@ -115,7 +115,7 @@ class StudioState:
         """``name`` checked against :func:`list_heads` (default: the studio's start-up head)."""
         if name is None or name == self.head_name:
             return self.head_name
-        infos = {h.name: h for h in _list_heads()}
+        infos = {h.name: h for h in head_infos()}
         if name not in infos:
             raise ParameterError(f"there is no head called {name!r}; heads: "
                                  f"{', '.join(infos)}")
@@ -246,7 +246,8 @@ class StudioState:
         return None
 
 
-def _list_heads() -> list[Any]:
+def head_infos() -> list[Any]:
+    """:func:`mimika.face.heads.list_heads` (the heads mimika knows, installed or not)."""
     from mimika.face.heads import list_heads
 
     return list_heads()
@@ -254,7 +255,7 @@ def _list_heads() -> list[Any]:
 
 def head_names() -> list[str]:
     """Names of every head :func:`mimika.face.heads.list_heads` knows (installed or not)."""
-    return [h.name for h in _list_heads()]
+    return [h.name for h in head_infos()]
 
 
 GROUPS = ("upper face", "lower face linear", "lower face orbital", "head", "eyes")
