@@ -31,19 +31,22 @@ def _png(img: Any, filename: str) -> Response:
                     headers={"Content-Disposition": f'attachment; filename="{filename}"'})
 
 
-def _can_render() -> None:
+async def _picture(work: Any, filename: str) -> Response:
+    """Run ``work`` (→ an RGB image) with the other exports, one at a time; answer a PNG."""
     import importlib.util
+
+    from mimika.studio.routers.export import _one_at_a_time
 
     if importlib.util.find_spec("moderngl") is None:
         raise HTTPException(501, "pictures need mimika's renderer (moderngl), which is not "
                                  "installed here; export glTF instead")
+    return _png(await run_in_threadpool(_one_at_a_time, work), filename)
 
 
 @router.post("/export/png")
 async def export_png(req: StillRequest, request: Request) -> Response:
     """The pose ``aus`` on the head as a PNG, drawn by the renderer in the chosen look."""
     st = state_of(request)
-    _can_render()
 
     def work() -> Any:
         from mimika.facs.blender import blend
@@ -55,17 +58,13 @@ async def export_png(req: StillRequest, request: Request) -> Response:
         with look.renderer(rig, req.look, size) as r:
             return r.render(rig.deform(aus), camera=look.camera(rig, req.look, req.view, size))
 
-    from mimika.studio.routers.export import _one_at_a_time
-
-    img = await run_in_threadpool(_one_at_a_time, work)
-    return _png(img, "pose.png")
+    return await _picture(work, "pose.png")
 
 
 @router.post("/export/sheet")
 async def export_sheet(req: SheetRequest, request: Request) -> Response:
     """A labelled contact sheet: one tile per library expression at full intensity."""
     st = state_of(request)
-    _can_render()
 
     def work() -> Any:
         from mimika.render import contact_sheet
@@ -86,7 +85,4 @@ async def export_sheet(req: SheetRequest, request: Request) -> Response:
         title = f"mimika: the expression library on the {st.head(req.head)} head"
         return contact_sheet(images, [e.name for e in exprs], columns=req.columns, title=title)
 
-    from mimika.studio.routers.export import _one_at_a_time
-
-    img = await run_in_threadpool(_one_at_a_time, work)
-    return _png(img, "expressions.png")
+    return await _picture(work, "expressions.png")
