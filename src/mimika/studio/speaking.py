@@ -29,13 +29,19 @@ def speak_request(text: str, project: Any, *, fps: float) -> Any:
 
 
 def sentences(text: str) -> list[tuple[str, int]]:
-    """``[(sentence, char_offset)]`` as the TTS splits them."""
+    """``[(sentence, char_offset)]`` of ``text`` read as ``mimika news`` reads an article:
+    paragraphs (blank lines), whitespace joined, a ``<speak>`` script's spoken text, each
+    paragraph split into sentences as the TTS splits them. Offsets count in the joined text."""
     from mimika.errors import ParameterError
+    from mimika.newsreader.article import parse_article
     from mimika.speech.tts import split_sentences
 
-    out = split_sentences(text)
-    if not out:
-        raise ParameterError("text is empty; type something to speak")
+    if not text.strip():
+        raise ParameterError("the text is empty; type something to speak")
+    out, base = [], 0
+    for para in parse_article(text, source="the text").paragraphs:
+        out += [(sent, base + off) for sent, off in split_sentences(para) or [(para, 0)]]
+        base += len(para) + 2
     return out
 
 
