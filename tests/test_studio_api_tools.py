@@ -50,6 +50,17 @@ def test_unknown_head_is_refused(client):
     err(client.get("/api/head.glb", params={"name": "martian"}), 400)
 
 
+def test_a_head_not_installed_says_so_plainly(client, monkeypatch):
+    from mimika.face import heads
+
+    real = heads.list_heads()
+    monkeypatch.setattr(heads, "list_heads", lambda: [
+        *real, heads.HeadInfo("avatar", "GltfRig", False, "not found: set MIMIKA_X (see 'x')")])
+    msg = err(client.get("/api/head", params={"name": "avatar"}), 400)
+    assert msg == "the avatar head is not installed on this computer"
+    assert [h["name"] for h in client.get("/api/heads").json()["heads"]][-1] == "avatar"
+
+
 def test_head_info_has_a_frame_for_the_camera(client):
     f = client.get("/api/head").json()["frame"]
     assert 0.1 < f["height"] < 0.4 and 0.05 < f["width"] < 0.3  # metres: a human face

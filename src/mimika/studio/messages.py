@@ -21,7 +21,7 @@ PATTERNS = {"name": "letters, digits, '-' and '_' (starting with a letter or dig
 
 
 #: hints meant for the command line: "(run 'mimika aus' for the full list)", "use --force …"
-_CLI_HINTS = (re.compile(r"\s*\(run '[^']*'[^)]*\)"),
+_CLI_HINTS = (re.compile(r"\s*\((?:run|see) '[^']*'[^)]*\)"),
               re.compile(r"[;,]?\s*(?:or )?use --[\w-]+[^;.]*"),
               re.compile(r"\s*\(e\.g\. --[^)]*\)"))
 

@@ -120,7 +120,8 @@ class StudioState:
             raise ParameterError(f"there is no head called {name!r}; heads: "
                                  f"{', '.join(infos)}")
         if not infos[name].available:
-            raise DataError(f"the {name} head is not installed here: {infos[name].description}")
+            raise DataError(f"the {name} head is not installed on this computer (see "
+                            "'mimika heads')")
         return name
 
     def _entry(self, name: str | None) -> list[Any]:

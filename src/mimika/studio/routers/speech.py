@@ -29,6 +29,7 @@ from starlette.concurrency import run_in_threadpool
 
 from mimika.errors import MimikaError
 from mimika.studio import speaking
+from mimika.studio.messages import plain
 from mimika.studio.routers._deps import state_of
 from mimika.studio.schemas import FramesRequest, SpeakRequest
 from mimika.studio.state import SpeechEntry, StudioState, speech_key
@@ -115,7 +116,7 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
         mix = await run_in_threadpool(speaking.mix_of, req.project, st, blend=req.blend)
         sents = speaking.sentences(req.text)
     except MimikaError as e:
-        await send.json({"type": "error", "id": sid, "message": str(e)})
+        await send.json({"type": "error", "id": sid, "message": plain(str(e))})
         return
     key = speech_key(req.text, req.lang, req.rate)
     cached = st.get_speech(key)
@@ -149,7 +150,7 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
             await send.json(info)
             t0 += seg.duration
     except MimikaError as e:
-        await send.json({"type": "error", "id": sid, "message": str(e)})
+        await send.json({"type": "error", "id": sid, "message": plain(str(e))})
         return
     except Exception as e:  # a bug: tell the page instead of leaving it waiting
         log.exception("studio: live speech failed")

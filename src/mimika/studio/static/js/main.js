@@ -1,6 +1,6 @@
 // mimika studio: wires the viewer, the panels, the timeline editor, the player, undo/redo and
 // the project files together.
-import { api } from "./api.js";
+import { api, sentence } from "./api.js";
 import { el, toast, debounce, fmt } from "./ui.js";
 import { Viewer } from "./viewer.js";
 import { AUPanel } from "./aupanel.js";
@@ -119,7 +119,14 @@ async function setProject(p, { name } = {}) {
   editor.setProject(S.project);
   if (before !== plainText(p) + "|" + st.lang) forgetSpeech();
   showCount();
-  if (st.head !== S.head) await useHead(st.head);
+  if (st.head !== S.head) {
+    try {
+      await useHead(st.head);
+    } catch (e) {  // a project made on another computer: keep it on the head shown
+      toast(`${e.message} The project stays on the ${S.head} head.`);
+      st.head = S.head;
+    }
+  }
   if (editor.missing().length) expressionsKnown();
   if (st.look !== viewer.look.name) viewer.setLook(st.look);
   if (st.view !== viewer.view) setView(st.view, false);
@@ -357,7 +364,7 @@ async function main() {
     onSentence: (sents) => { editor.words = sents.flatMap((s) => s.words); editor.speechEnd = Math.max(...sents.map((s) => s.end)); editor.render(); },
     onState: (mode) => { $("btn-play").textContent = mode === "idle" ? "Play" : "Pause"; if (mode === "idle" && S.source !== "designer") setSource("timeline"); },
     onLatency: showLatency });
-  player.onError = (msg) => toast(msg);
+  player.onError = (msg) => toast(/^internal error/i.test(msg) ? "Speaking failed inside the studio server (its log has the details); press Speak again." : sentence(msg));
   editor = new TimelineEditor({ heads: $("tl-heads"), scroll: $("tl-scroll"), canvas: $("tl-canvas"), ruler: $("tl-ruler"),
     lanes: $("tl-lanes"), playhead: $("tl-playhead"), knob: $("tl-knob"), params: $("param-body"), easings: status.easings,
     onChange: () => resample(), onSeek: seek, onCommit: commit,
