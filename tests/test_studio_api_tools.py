@@ -221,3 +221,45 @@ def test_contact_sheet_of_the_library(client):
         "names": ["neutral", "happiness", "surprise"], "tile": 128, "columns": 3}))
     assert sheet.shape[1] > 3 * 128 and sheet.shape[0] > 128
     err(client.post("/api/export/sheet", json={"names": ["nope"], "tile": 128}), 400)
+
+
+# -- recorded speech -----------------------------------------------------------------------------
+def upload(text: str, audio: np.ndarray, sr: int, **extra) -> bytes:
+    head = json.dumps({"text": text, "lang": "en", "sr": sr, **extra}).encode()
+    pcm = (np.clip(audio, -1, 1) * 32767).astype("<i2").tobytes()
+    return struct.pack("<I", len(head)) + head + pcm
+
+
+def test_recording_is_aligned_to_its_text(client):
+    from mimika.speech import synthesize
+
+    text = "Good evening. The weather stays dry and mild."
+    rec = synthesize(text, rate=130)  # a "recording": slower than the aligner's reference
+    doc = project_doc(text, events=[])
+    doc["settings"]["behaviour"] = ["blink"]
+    r = client.post("/api/speech/align", content=upload(text, rec.audio, rec.sr, project=doc))
+    assert r.status_code == 200, r.text
+    d = r.json()
+    assert d["aligned"] and len(d["segments"]) == len(d["sentences"]) == 2
+    assert d["duration"] == pytest.approx(rec.duration, abs=0.01)
+    words = [w["text"].strip() for s in d["sentences"] for w in s["words"]]
+    assert words[:2] == ["Good", "evening"] and words[-1] == "mild"
+    assert "AU45" in d["segments"][0]["channels"]  # behaviour layers run on recordings too
+    wav = client.get(d["audio"])
+    assert wav.status_code == 200 and len(wav.content) > 2 * rec.sr * rec.duration * 0.9
+    # exports use the recording, not a synthesis of the text
+    r = client.post("/api/export/csv", json={"project": doc, "fps": 25,
+                                             "speech_key": d["key"]})
+    rows = r.text.strip().splitlines()
+    assert len(rows) - 1 == pytest.approx(rec.duration * 25, abs=2)
+    assert "load it again" in err(client.post("/api/export/csv", json={
+        "project": doc, "speech_key": "0" * 20}), 400)
+
+
+def test_recording_upload_errors_are_plain(client):
+    a = np.zeros(22050, np.float32)
+    assert "choose the file again" in err(client.post("/api/speech/align", content=b"xx"), 400)
+    assert "type the words" in err(client.post("/api/speech/align",
+                                               content=upload(" ", a, 22050)), 400)
+    assert "choose the file again" in err(client.post("/api/speech/align",
+                                                      content=upload("Hi.", a, 5)), 400)

@@ -209,3 +209,37 @@ def test_viewer_draws_the_materials_a_glb_carries(browser, server):
         assert errors == []
     finally:
         ctx.close()
+
+
+def test_lip_sync_a_recording_of_the_text(studio, tmp_path):
+    """A recording (any format the browser reads) with its text: the mouth follows it."""
+    from mimika.speech import synthesize
+    from mimika.speech.audio import write_wav
+
+    pg = studio
+    text = "Good evening. The weather stays dry and mild."
+    rec = synthesize(text, rate=130)
+    wav = tmp_path / "take.wav"
+    write_wav(wav, rec.audio, sr=rec.sr)
+    pg.fill("#speech-text", text)
+    pg.set_input_files("#recording-file", str(wav))
+    pg.wait_for_selector(".toast.ok:has-text('take.wav')")
+    assert pg.evaluate("mimikaStudio.player.recording") == "take.wav"
+    assert pg.evaluate("mimikaStudio.player.duration") == pytest.approx(rec.duration, abs=0.05)
+    words = pg.evaluate("mimikaStudio.editor.words.map(w => w.text.trim())")
+    assert words[0] == "Good" and words[-1] == "mild"
+    record(pg)
+    pg.click("#btn-play")
+    pg.wait_for_function("window.__rec.some(f => f.mode === 'audio')"
+                         " && mimikaStudio.player.mode === 'idle'")
+    played = [f for f in recorded(pg) if f["mode"] == "audio"]
+    assert max(f["mouth"] for f in played) > 0.1
+    assert any("weather" in f["subtitle"] for f in played)
+    # the CSV export carries the recording's length, not a new synthesis
+    pg.click("#export-menu summary")
+    _, data = download_bytes(pg, lambda: pg.click("#btn-export-csv"))
+    rows = data.decode().strip().splitlines()
+    assert (len(rows) - 1) / 30 == pytest.approx(rec.duration, abs=0.1)
+    # changing the text forgets the recording
+    pg.fill("#speech-text", "Something else.")
+    assert pg.evaluate("mimikaStudio.player.recording") is None

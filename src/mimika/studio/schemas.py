@@ -89,6 +89,8 @@ class ExportRequest(_Strict):
     head: str | None = Field(None, max_length=200)
     view: Literal["front", "three-quarter", "profile"] = "front"
     look: Literal["plain", "news"] = "plain"
+    #: speech the page has (a recording): used instead of synthesising the project's text
+    speech_key: str | None = Field(None, pattern=r"^[0-9a-f]{20}$")
 
     check_aus = field_validator("aus")(lambda v: None if v is None else _check_aus(v))
 

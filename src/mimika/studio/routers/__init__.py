@@ -7,10 +7,11 @@ from mimika.studio.routers import (
     latent,
     look,
     projects,
+    recording,
     speech,
 )
 
 ROUTERS = (face.router, expressions.router, projects.router, speech.router, export.router,
-           latent.router, look.router)
+           latent.router, look.router, recording.router)
 
 __all__ = ["ROUTERS"]

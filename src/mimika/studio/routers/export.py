@@ -41,14 +41,26 @@ def _track(st: StudioState, req: ExportRequest) -> tuple[Any, Any]:
     mix = speaking.mix_of(req.project, st)
     text = tl.speech.text.strip()
     if req.speech and text:
-        from mimika.studio.routers.speech import _entry
-
-        entry = _entry(st, speaking.speak_request(text, proj, fps=req.fps))
-        return speaking.entry_track(entry, mix, fps=req.fps), proj
+        return speaking.entry_track(_speech(st, req, text, proj), mix, fps=req.fps), proj
     from mimika.timeline import sample
 
     return sample(tl, fps=req.fps, blend=mix.blend, disabled=mix.disabled, library=mix.library,
                   duration=max(tl.end, 1.0 / req.fps)), proj
+
+
+def _speech(st: StudioState, req: ExportRequest, text: str, proj: Any) -> Any:
+    """The project's speech: the recording the page names (``speech_key``), else its text
+    spoken by espeak-ng (cached)."""
+    if req.speech_key:
+        entry = st.get_speech(req.speech_key)
+        if entry is None or not entry.done:
+            from mimika.errors import ParameterError
+
+            raise ParameterError("the recording is no longer on the server; load it again")
+        return entry
+    from mimika.studio.routers.speech import _entry
+
+    return _entry(st, speaking.speak_request(text, proj, fps=req.fps))
 
 
 def _rig(st: StudioState, req: ExportRequest, proj: Any) -> Any:
@@ -119,10 +131,7 @@ async def export_mp4(req: ExportRequest, request: Request) -> Response:
             audio = sr = None
             text = proj.timeline.speech.text.strip() if proj is not None else ""
             if req.speech and text:
-                from mimika.studio.routers.speech import _entry
-
-                entry = _entry(st, speaking.speak_request(text, proj, fps=req.fps))
-                audio, sr = entry.audio()
+                audio, sr = _speech(st, req, text, proj).audio()
             if track.n_frames < 2:  # a pose: one second of it
                 from mimika.tracks import AUTrack
 

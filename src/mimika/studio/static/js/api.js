@@ -13,7 +13,10 @@ const NO_SERVER = "The studio server is not answering. Is “mimika studio” st
 
 export async function api(path, { method = "GET", body, raw = false, quiet = false, signal } = {}) {
   const opts = { method, headers: {}, signal };
-  if (body !== undefined) {
+  if (body instanceof Uint8Array) {
+    opts.headers["Content-Type"] = "application/octet-stream";
+    opts.body = body;
+  } else if (body !== undefined) {
     opts.headers["Content-Type"] = "application/json";
     opts.body = JSON.stringify(body);
   }

@@ -116,8 +116,52 @@ export class Files {
     const empty = !S.project.timeline.channels.some((c) => c.events.length) && !this.app.text().trim();
     const usePose = S.source === "designer" && empty;
     const st = S.project.settings;
+    const rec = this.app.recordingKey();
     return usePose ? { aus: this.app.currentPose(), name: this.serverName(), fps: 30, head: st.head, view: st.view, look: st.look || "plain" }
-      : { project: S.project, name: this.serverName(), fps: 30 };
+      : { project: S.project, name: this.serverName(), fps: 30, ...(rec ? { speech_key: rec } : {}) };
+  }
+
+  // A recording of the text: decoded and resampled here (any format the browser plays),
+  // aligned on the server; then Play, the subtitles and the exports use it.
+  async importRecording(file) {
+    const { S } = this.app;
+    this.app.syncText();
+    const text = this.app.text();
+    if (!text.trim()) { toast("Type the words of the recording into the text box first: the studio lines the mouth up with them."); return; }
+    if (!this.app.textFits()) return;
+    let pcm;
+    try {
+      const decoded = await new AudioContext().decodeAudioData(await file.arrayBuffer());
+      const sr = 22050, n = Math.ceil(decoded.duration * sr);
+      const off = new OfflineAudioContext(1, n, sr);
+      const src = off.createBufferSource();
+      src.buffer = decoded;
+      src.connect(off.destination);
+      src.start();
+      const mono = (await off.startRendering()).getChannelData(0);
+      pcm = new Int16Array(n);
+      for (let i = 0; i < n; i++) pcm[i] = Math.max(-32768, Math.min(32767, Math.round(mono[i] * 32767)));
+    } catch {
+      toast(`“${file.name}” is not a recording this browser can read: use WAV, MP3, OGG or another audio format.`);
+      return;
+    }
+    const head = new TextEncoder().encode(JSON.stringify({ text, lang: S.project.settings.lang, sr: 22050,
+      project: S.project, blend: !!S.project.settings.blend }));
+    const room = S.status.limits.max_body - head.length - 4;
+    if (pcm.byteLength > room) {
+      toast(`“${file.name}” is ${(pcm.length / 22050).toFixed(0)} s long; the studio takes recordings of up to ${(room / 2 / 22050).toFixed(0)} s at a time. Cut it into parts.`);
+      return;
+    }
+    const body = new Uint8Array(4 + head.length + pcm.byteLength);
+    new DataView(body.buffer).setUint32(0, head.length, true);
+    body.set(head, 4);
+    body.set(new Uint8Array(pcm.buffer), 4 + head.length);
+    await this.run("recording", $("btn-recording"), async () => {
+      const r = await api("/api/speech/align", { method: "POST", body });
+      this.app.useRecording(r, file.name);
+      toast(`The mouth now follows “${file.name}” (${r.duration.toFixed(1)} s). Press Play.`, "ok", 4000);
+      return 0;
+    }, { what: `Lining up the mouth with “${file.name}”` });
   }
 
   async exportAs(kind) {

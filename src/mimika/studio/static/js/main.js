@@ -369,7 +369,9 @@ async function main() {
     lanes: $("tl-lanes"), playhead: $("tl-playhead"), knob: $("tl-knob"), params: $("param-body"), easings: status.easings,
     onChange: () => resample(), onSeek: seek, onCommit: commit,
     expressionNames: () => library.names(), hasExpression: (n) => library.has(n), defaultExpression: () => "happiness" });
-  files = new Files({ S, syncText, text, textFits, expressionsKnown, loadProject, markSaved, currentPose });
+  const useRecording = (r, name) => { player.loadSpeech(r, name); setSource("timeline"); seek(0); };
+  const recordingKey = () => (player.recording ? player.key : null);
+  files = new Files({ S, syncText, text, textFits, expressionsKnown, loadProject, markSaved, currentPose, useRecording, recordingKey });
   history = new History(snapshot, { onChange: (h) => { $("btn-undo").disabled = !h.canUndo; $("btn-redo").disabled = !h.canRedo; } });
   S.head = heads.default;
   $("head-select").value = S.head;
@@ -389,6 +391,8 @@ async function main() {
   on("btn-load", "click", () => files.open($("project-list").value));
   on("btn-new", "click", () => loadProject(emptyProject(""), "", "Started a new project."));
   on("btn-import", "click", () => $("import-file").click());
+  on("btn-recording", "click", () => $("recording-file").click());
+  on("recording-file", "change", async (e) => { const f = e.target.files[0]; e.target.value = ""; if (f) await files.importRecording(f); });
   on("import-file", "change", async (e) => { const f = e.target.files[0]; e.target.value = ""; if (f) await files.importFile(f); });
   on("btn-undo", "click", undo);
   on("btn-redo", "click", redo);

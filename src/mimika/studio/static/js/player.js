@@ -42,8 +42,18 @@ export class Player {
     if (this.mode === "live" || this.mode === "audio") this.stop();
     this.id = this.nextId++;  // late messages of the old text are ignored
     this.segments = []; this.sentences = []; this.duration = 0; this.key = null; this.done = false;
+    this.recording = null;
     this.audio.removeAttribute("src");
     this.audio.load();
+  }
+
+  // Speech that arrived whole (a recording aligned on the server): ready for Play.
+  loadSpeech(r, recording) {
+    this.clearSpeech();
+    this.key = r.key; this.segments = r.segments; this.sentences = r.sentences;
+    this.duration = r.duration; this.done = true; this.recording = recording;
+    this.audio.src = r.audio;
+    this.onSentence(this.sentences);
   }
 
   timelineEnd() { return this.tl ? (this.tl.values.length - 1) / this.tl.fps : 0; }
