@@ -18,7 +18,8 @@ CONTROLS = ["#project-name", "#btn-save", "#project-list", "#btn-load", "#btn-ne
             "#btn-undo", "#btn-redo", "#export-menu summary", "#head-select", "#au-groups",
             "#btn-reset", "#view", "#view-tools", "#look-select", "#tab-expr", "#tab-blend",
             "#tab-latent", "#expr-filter", "#expr-list", "#expr-name", "#btn-expr-save",
-            "#speech-text", "#text-count", "#lang", "#btn-speak", "#layers-menu summary",
+            "#speech-text", "#text-count", "#lang", "#btn-speak", "#btn-recording",
+            "#layers-menu summary",
             "#btn-play", "#btn-stop", "#tl-scroll", "#param-body", "#zoom-in",
             "#zoom-out", ".tl-head button"]  # (the ruler scrolls inside #tl-scroll)
 #: regions that must not overlap each other
