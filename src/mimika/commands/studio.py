@@ -8,6 +8,7 @@ from pathlib import Path
 
 from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
+from mimika.face.heads import DEFAULT_HEAD
 
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 
@@ -58,8 +59,9 @@ def register(sub) -> None:
                    help="address to bind (default 127.0.0.1: this computer only)")
     q.add_argument("--projects", metavar="DIR",
                    help="folder of project files (default: ~/.local/share/mimika/projects)")
-    q.add_argument("--head", default="builtin",
-                   help="builtin, ict or a glTF/GLB/VRM character file (default: builtin)")
+    q.add_argument("--head", default=DEFAULT_HEAD, metavar="NAME",
+                   help="the head the page opens with: a name from 'mimika heads' (default "
+                        f"{DEFAULT_HEAD}); the page switches heads without a restart")
     q.add_argument("--library", metavar="FILE",
                    help="user expression library (default: ~/.local/share/mimika/expressions.json)")
     q.add_argument("--no-browser", action="store_true", help="do not open a browser window")

@@ -115,12 +115,9 @@ async def _send_json(send: Any, status: int, message: str) -> None:
 
 
 def _validation_message(exc: RequestValidationError) -> str:
-    parts = []
-    for err in exc.errors()[:5]:
-        loc = ".".join(str(x) for x in err.get("loc", ()) if x != "body")
-        msg = str(err.get("msg", "invalid")).removeprefix("Value error, ")
-        parts.append(f"{loc}: {msg}" if loc else msg)
-    return "; ".join(parts) or "invalid request"
+    from mimika.studio.messages import validation_message
+
+    return validation_message(list(exc.errors()))
 
 
 def create_app(projects_dir: str | Path, *, head: str = "builtin",
@@ -176,18 +173,22 @@ def create_app(projects_dir: str | Path, *, head: str = "builtin",
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
-        msg = exc.detail if isinstance(exc.detail, str) else json.dumps(exc.detail)
+        extra = dict(exc.detail) if isinstance(exc.detail, dict) else {}
+        msg = (exc.detail if isinstance(exc.detail, str) else
+               str(extra.pop("error", "")) or json.dumps(exc.detail))
         if exc.status_code == 404 and msg == "Not Found":
             msg = f"no such endpoint or file: {request.url.path}"
         if exc.status_code == 405:
             msg = f"{request.method} is not allowed on {request.url.path}"
-        return error_response(exc.status_code, msg)
+        return error_response(exc.status_code, msg, **extra)
 
     @app.exception_handler(MimikaError)
     async def _mimika(request: Request, exc: MimikaError) -> JSONResponse:
         problems = getattr(exc, "problems", None)
         extra = {"problems": problems} if problems else {}
-        return error_response(_status_of(exc), str(exc), **extra)
+        from mimika.studio.messages import plain
+
+        return error_response(_status_of(exc), plain(str(exc)), **extra)
 
     @app.exception_handler(Exception)
     async def _bug(request: Request, exc: Exception) -> JSONResponse:
@@ -211,9 +212,9 @@ def _warm(state: StudioState) -> None:
     """Load the head, build its GLB and start espeak-ng so the first request is fast."""
     try:
         state.glb()
-        from mimika.studio.speaking import synth_segment
+        from mimika.studio.speaking import warm
 
-        synth_segment(state, "Ready.", 0, 0.0, lang="en", rate=175, fps=30.0)
+        warm(state)
         log.info("studio: warm")
     except MimikaError as e:  # reported again on first use
         log.warning("studio: warm-up failed: %s", e)

@@ -14,7 +14,7 @@ from mimika.studio import speaking
 from mimika.studio.jobs import MP4_WEIGHT, Job, Jobs, temp_dir
 from mimika.studio.routers._deps import state_of
 from mimika.studio.routers.projects import _validate
-from mimika.studio.schemas import ExportRequest, SpeakRequest
+from mimika.studio.schemas import ExportRequest
 from mimika.studio.state import StudioState, gltf_bytes
 
 router = APIRouter(prefix="/api/export", tags=["export"])
@@ -22,7 +22,7 @@ router = APIRouter(prefix="/api/export", tags=["export"])
 VIDEO_FUNCS = ("render_project", "render_mp4")
 
 
-def _plan(req: ExportRequest) -> tuple[Any, int]:
+def _plan(req: ExportRequest, st: StudioState) -> tuple[Any, int]:
     """The validated project (None for a pose) and how many frames the export makes — refused
     here, before any work, when over the limits (:mod:`mimika.limits`)."""
     if req.project is None:
@@ -31,7 +31,7 @@ def _plan(req: ExportRequest) -> tuple[Any, int]:
 
             raise ParameterError("give a project or a pose (aus) to export")
         return None, 1
-    proj = _validate(req.project, "project")
+    proj = _validate(req.project, "project", st)
     tl = proj.timeline
     seconds = max(tl.end, 1.0 / req.fps)
     text = tl.speech.text.strip()
@@ -47,19 +47,36 @@ def _track(st: StudioState, req: ExportRequest, proj: Any, job: Job) -> Any:
     if proj is None:
         return AUTrack.constant(req.aus or {}, n_frames=1, fps=req.fps)
     tl = proj.timeline
-    blend = bool(proj.settings.get("blend"))
+    mix = speaking.mix_of(req.project, st)
     text = tl.speech.text.strip()
     if req.speech and text:
-        from mimika.studio.routers.speech import _entry
-
-        sreq = SpeakRequest(text=text[:5000], lang=str(proj.settings.get("lang", "en")),
-                            fps=req.fps)
-        entry = _entry(st, sreq)
+        entry = _speech(st, req, text, proj)
         job.check()
-        return speaking.entry_track(entry, tl, fps=req.fps, blend=blend)
+        return speaking.entry_track(entry, mix, fps=req.fps)
     from mimika.timeline import sample
 
-    return sample(tl, fps=req.fps, blend=blend, duration=max(tl.end, 1.0 / req.fps))
+    return sample(tl, fps=req.fps, blend=mix.blend, disabled=mix.disabled, library=mix.library,
+                  duration=max(tl.end, 1.0 / req.fps))
+
+
+def _speech(st: StudioState, req: ExportRequest, text: str, proj: Any) -> Any:
+    """The project's speech: the recording the page names (``speech_key``), else its text
+    spoken by espeak-ng (cached)."""
+    if req.speech_key:
+        entry = st.get_speech(req.speech_key)
+        if entry is None or not entry.done:
+            from mimika.errors import ParameterError
+
+            raise ParameterError("the recording is no longer on the server; load it again")
+        return entry
+    from mimika.studio.routers.speech import _entry
+
+    return _entry(st, speaking.speak_request(text, proj, fps=req.fps))
+
+
+def _rig(st: StudioState, req: ExportRequest, proj: Any) -> Any:
+    """The rig of the project's head (a pose: the request's head)."""
+    return st.rig(str(proj.settings["head"]) if proj is not None else req.head)
 
 
 def _attachment(data: bytes, media: str, filename: str) -> Response:
@@ -78,12 +95,12 @@ async def export_gltf(req: ExportRequest, request: Request, job: str | None = No
     """A GLB of the head animated by the project (speech + timeline) or posed by ``aus``.
     ``?job=ID`` names the export so that ``DELETE /api/export/jobs/ID`` can cancel it."""
     st = state_of(request)
-    proj, frames = await run_in_threadpool(_plan, req)
+    proj, frames = await run_in_threadpool(_plan, req, st)
 
     def work(j: Job) -> bytes:
         track = _track(st, req, proj, j)
         j.check()
-        return gltf_bytes(st.rig(), track, name=req.name)
+        return gltf_bytes(_rig(st, req, proj), track, name=req.name)
 
     data = await _run(request, req, "glTF", work, frames, job)
     return _attachment(data, "model/gltf-binary", f"{req.name}.glb")
@@ -95,7 +112,7 @@ async def export_csv(req: ExportRequest, request: Request, job: str | None = Non
     from mimika.io.tracks import write_track
 
     st = state_of(request)
-    proj, frames = await run_in_threadpool(_plan, req)
+    proj, frames = await run_in_threadpool(_plan, req, st)
 
     def work(j: Job) -> bytes:
         track = _track(st, req, proj, j)
@@ -117,7 +134,7 @@ async def export_mp4(req: ExportRequest, request: Request, job: str | None = Non
     why = None if name else st.mp4_unavailable()
     if why is not None:
         raise HTTPException(501, f"{why}; export glTF or CSV instead")
-    proj, frames = await run_in_threadpool(_plan, req)
+    proj, frames = await run_in_threadpool(_plan, req, st)
 
     def work(j: Job) -> bytes:
         with temp_dir() as d:
@@ -133,11 +150,7 @@ async def export_mp4(req: ExportRequest, request: Request, job: str | None = Non
             audio = sr = None
             text = proj.timeline.speech.text.strip() if proj is not None else ""
             if req.speech and text:
-                from mimika.studio.routers.speech import _entry
-
-                entry = _entry(st, SpeakRequest(text=text[:5000], fps=req.fps,
-                                                lang=str(proj.settings.get("lang", "en"))))
-                audio, sr = entry.audio()
+                audio, sr = _speech(st, req, text, proj).audio()
             if track.n_frames < 2:  # a pose: one second of it
                 from mimika.tracks import AUTrack
 
@@ -145,9 +158,10 @@ async def export_mp4(req: ExportRequest, request: Request, job: str | None = Non
                                 req.fps)
             size = tuple(proj.settings.get("size", (640, 480))) if proj else (640, 480)
             view = str(proj.settings.get("view", "front")) if proj else "front"
+            look = str(proj.settings.get("look", "plain")) if proj else req.look
             j.check()
-            render_mp4(st.rig(), track, p, audio=audio, sr=sr, size=size, view=view,
-                       progress=j.check)
+            render_mp4(_rig(st, req, proj), track, p, audio=audio, sr=sr, size=size, view=view,
+                       look=look, progress=j.check)
             return p.read_bytes()
 
     data = await _run(request, req, "MP4", work, max(frames, int(req.fps)) * MP4_WEIGHT, job)
