@@ -37,8 +37,13 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+#: the head the browser tests open with (the light built-in head); a test module may set
+#: ``STUDIO_HEAD`` to open with another (the default character has its own test file)
+HEAD = "builtin"
+
+
 @pytest.fixture(scope="module")
-def server(tmp_path_factory):
+def server(tmp_path_factory, request):
     pytest.importorskip("fastapi")
     uvicorn = pytest.importorskip("uvicorn")
     from mimika.errors import DataError
@@ -50,7 +55,8 @@ def server(tmp_path_factory):
     except DataError as e:
         pytest.skip(str(e))
     d = tmp_path_factory.mktemp("studio-browser")
-    app = create_app(d / "projects", library_path=d / "expressions.json", warm_up=True)
+    app = create_app(d / "projects", library_path=d / "expressions.json", warm_up=True,
+                     head=getattr(request.module, "STUDIO_HEAD", HEAD))
     port = _free_port()
     srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
                                         ws_max_size=2 * 1024 * 1024))

@@ -26,7 +26,7 @@ def server(tmp_path_factory):
 
     d = tmp_path_factory.mktemp("studio-abuse")
     app = create_app(d / "projects", library_path=d / "expressions.json",
-                     allowed_hosts=["studio.example.org"])
+                     allowed_hosts=["studio.example.org"], head="builtin")
     with serve_app(app) as port:
         yield {"base": f"http://127.0.0.1:{port}", "port": port, "app": app}
 

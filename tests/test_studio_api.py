@@ -42,7 +42,7 @@ LIVE = "ws://127.0.0.1:8765/api/live"
 @pytest.fixture(scope="module")
 def app(tmp_path_factory):
     d = tmp_path_factory.mktemp("studio")
-    return create_app(d / "projects", library_path=d / "expressions.json")
+    return create_app(d / "projects", library_path=d / "expressions.json", head="builtin")
 
 
 @pytest.fixture(scope="module")
@@ -350,7 +350,8 @@ def test_latent_feature_detected(client):
 
 # -- limits and errors ---------------------------------------------------------------------------
 def test_body_size_limit(tmp_path):
-    small = create_app(tmp_path / "p", library_path=tmp_path / "e.json", max_body=1000)
+    small = create_app(tmp_path / "p", library_path=tmp_path / "e.json", max_body=1000,
+                       head="builtin")
     with TestClient(small, base_url=BASE) as c:
         big = {"aus": {"AU12": 0.5}, "disabled": ["x" * 2000]}
         assert "limit" in err(c.post("/api/blend", json=big), 413)

@@ -27,7 +27,7 @@ from test_studio_api import err, project_doc
 @pytest.fixture(scope="module")
 def client(tmp_path_factory):
     d = tmp_path_factory.mktemp("studio-tools")
-    with TestClient(create_app(d / "projects", library_path=d / "expressions.json"),
+    with TestClient(create_app(d / "projects", library_path=d / "expressions.json", head="builtin"),
                     base_url="http://127.0.0.1:8765") as c:
         yield c
 

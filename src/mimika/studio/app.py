@@ -23,6 +23,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 import mimika
 from mimika import limits
 from mimika.errors import MimikaError
+from mimika.face.heads import DEFAULT_HEAD
 from mimika.studio.state import StudioState
 
 log = logging.getLogger(__name__)
@@ -120,7 +121,7 @@ def _validation_message(exc: RequestValidationError) -> str:
     return validation_message(list(exc.errors()))
 
 
-def create_app(projects_dir: str | Path, *, head: str = "builtin",
+def create_app(projects_dir: str | Path, *, head: str = DEFAULT_HEAD,
                library_path: str | Path | None = None,
                controller_path: str | Path | None = None, max_body: int | None = None,
                warm_up: bool = False, host: str = "127.0.0.1",
@@ -130,7 +131,8 @@ def create_app(projects_dir: str | Path, *, head: str = "builtin",
     Parameters
     ----------
     projects_dir : folder of project files (``NAME.json``); created if missing
-    head : ``builtin`` or ``ict``
+    head : the head the page opens with (a name from ``mimika heads`` or a file; default the
+        default character)
     library_path : user expression library (default ``$MIMIKA_DATA_DIR/expressions.json``)
     controller_path : a WGAN checkpoint for the latent sliders (default: the shipped one)
     max_body : request size limit in bytes (default: ``mimika.limits`` max_body)

@@ -33,6 +33,10 @@ def look_info() -> dict[str, Any]:
         for k in ("key_dir", "fill_dir", "rim_dir"):
             lit[k] = list(unit(lit[k]))
         looks[name] = {**lit, "fill": FILL[name], "skin_shader": name == "news"}
+    from mimika.newsreader.pipeline import BUST_FILL, EYE_LINE
+
+    # heads with a body get the newsreader's head-and-shoulders shot in the news look
+    looks["news"].update(bust_fill=BUST_FILL, eye_line=EYE_LINE)
     sp = SkinParams()
     return {
         "looks": looks,
@@ -71,7 +75,12 @@ def renderer(rig: Any, look: str, size: tuple[int, int]) -> Any:
 
 
 def camera(rig: Any, look: str, view: str, size: tuple[int, int]) -> Any:
-    """The camera of ``view`` framed as the look frames the face."""
+    """The camera of ``view`` framed as the look frames the face (the news look: as the
+    newsreader frames it, head and shoulders for heads with a body)."""
+    if look == "news":
+        from mimika.newsreader.pipeline import news_camera
+
+        return news_camera(rig.head, view, size[0] / size[1])
     from mimika.render.camera import frame_head
 
     return frame_head(rig.head, view, aspect=size[0] / size[1], fill=FILL[look])

@@ -15,6 +15,7 @@ import numpy as np
 
 from mimika import limits
 from mimika.errors import DataError, MimikaError, ParameterError
+from mimika.face.heads import DEFAULT_HEAD
 
 log = logging.getLogger(__name__)
 
@@ -89,7 +90,7 @@ class StudioState:
     library_path : the user expression library (default: the user's library)
     """
 
-    def __init__(self, projects_dir: str | Path, *, head: str = "builtin",
+    def __init__(self, projects_dir: str | Path, *, head: str = DEFAULT_HEAD,
                  library_path: str | Path | None = None, controller_path: str | Path | None = None,
                  speech_cache: int = 32, heads_cache: int = 2):
         self.projects_dir = Path(projects_dir)
@@ -185,7 +186,9 @@ class StudioState:
                        for k in ("head_rot", "head_tr", "eye_rot")},
             "scale": SCALE,
             "frame": {"centre": [float(x) * SCALE for x in centre],
-                      "height": float(height) * SCALE, "width": float(width) * SCALE},
+                      "height": float(height) * SCALE, "width": float(width) * SCALE,
+                      "eye_y": float(rig.head.landmark_points()[36:48, 1].mean()) * SCALE,
+                      "body": any(o.category == "body" for o in rig.head.objects)},
         }
 
     # -- expression library ------------------------------------------------------------------

@@ -7,7 +7,6 @@ import io
 from typing import Any
 
 from fastapi import APIRouter, HTTPException, Request, Response
-from starlette.concurrency import run_in_threadpool
 
 from mimika.studio import look
 from mimika.studio.routers._deps import state_of
@@ -22,25 +21,26 @@ def look_info() -> dict[str, Any]:
     return look.look_info()
 
 
-def _png(img: Any, filename: str) -> Response:
+def _png_bytes(img: Any) -> bytes:
     from PIL import Image
 
     buf = io.BytesIO()
     Image.fromarray(img).save(buf, format="PNG")
-    return Response(buf.getvalue(), media_type="image/png",
-                    headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+    return buf.getvalue()
 
 
-async def _picture(work: Any, filename: str) -> Response:
-    """Run ``work`` (→ an RGB image) with the other exports, one at a time; answer a PNG."""
+async def _picture(request: Request, work: Any, filename: str, frames: int) -> Response:
+    """Run ``work`` (→ an RGB image) as an export job (:mod:`mimika.studio.jobs`: bounded in
+    time, in the lanes of the other exports); answer a PNG."""
     import importlib.util
-
-    from mimika.studio.routers.export import _one_at_a_time
 
     if importlib.util.find_spec("moderngl") is None:
         raise HTTPException(501, "pictures need mimika's renderer (moderngl), which is not "
                                  "installed here; export glTF instead")
-    return _png(await run_in_threadpool(_one_at_a_time, work), filename)
+    data = await request.app.state.jobs.run(request, lambda job: _png_bytes(work()), kind="PNG",
+                                            name=filename, frames=frames, job_id=None)
+    return Response(data, media_type="image/png",
+                    headers={"Content-Disposition": f'attachment; filename="{filename}"'})
 
 
 @router.post("/export/png")
@@ -58,7 +58,7 @@ async def export_png(req: StillRequest, request: Request) -> Response:
         with look.renderer(rig, req.look, size) as r:
             return r.render(rig.deform(aus), camera=look.camera(rig, req.look, req.view, size))
 
-    return await _picture(work, "pose.png")
+    return await _picture(request, work, "pose.png", 1)
 
 
 @router.post("/export/sheet")
@@ -85,4 +85,4 @@ async def export_sheet(req: SheetRequest, request: Request) -> Response:
         title = f"mimika: the expression library on the {st.head(req.head)} head"
         return contact_sheet(images, [e.name for e in exprs], columns=req.columns, title=title)
 
-    return await _picture(work, "expressions.png")
+    return await _picture(request, work, "expressions.png", len(req.names or ()) or 50)

@@ -69,6 +69,9 @@ export class Viewer {
     this.frameInfo = info.frame;
     this.root = gltf.scene;
     this.headJoint = this.eyeL = this.eyeR = null;
+    // a character's GLB says how AU values move its skeleton (io/gltf_skinned.py)
+    this.rig = (gltf.parser.json.extras || {}).rig || null;
+    this.joints = {};
     this.meshes = [];
     const seen = new Set();
     this.root.traverse((o) => {
@@ -79,6 +82,7 @@ export class Viewer {
         }
         if (o.morphTargetDictionary) this.meshes.push(o);
       }
+      if (o.isBone || (this.rig && o.type === "Bone")) this.joints[o.name] = o;
       if (o.name === "head" && !this.headJoint) this.headJoint = o;
       if (o.name === "eye_L") this.eyeL = o;
       if (o.name === "eye_R") this.eyeR = o;
@@ -110,10 +114,13 @@ export class Viewer {
     const f = this.frameInfo;
     if (!f) return;
     const angle = (this.lookInfo.views[view] ?? 0) * DEG;
-    const fill = this.look.fill;
+    // heads with a body: the news look's head-and-shoulders shot (as the newsreader frames it)
+    const bust = f.body && this.look.bust_fill;
+    const fill = bust ? this.look.bust_fill : this.look.fill;
     const visible = Math.max(f.height / fill, f.width / (0.85 * this.camera.aspect));
     const dist = visible / 2 / Math.tan((this.camera.fov * DEG) / 2);
     const c = new THREE.Vector3(...f.centre);
+    if (bust) c.y = f.eye_y - (0.5 - this.look.eye_line) * visible;
     this.camera.position.set(c.x + dist * Math.sin(angle), c.y, c.z + dist * Math.cos(angle));
     this.camera.up.set(0, 1, 0);
     this.camera.lookAt(c);
@@ -182,7 +189,9 @@ export class Viewer {
       const a = rv.length();
       return a > 1e-9 ? new THREE.Quaternion().setFromAxisAngle(rv.divideScalar(a), a) : new THREE.Quaternion();
     };
-    if (this.headJoint) {
+    if (this.rig) {
+      this.applyRig(frame);
+    } else if (this.headJoint) {
       this.headJoint.quaternion.copy(rot(this.motion.head_rot));
       const t = this.headRest.clone();
       for (const [code, vec] of Object.entries(this.motion.head_tr)) {
@@ -194,6 +203,37 @@ export class Viewer {
     const eq = rot(this.motion.eye_rot);
     if (this.eyeL) this.eyeL.quaternion.copy(eq);
     if (this.eyeR) this.eyeR.quaternion.copy(eq);
+  }
+
+  // A character: each joint turns by its rest pose + its share of the head AUs + the body
+  // channels (rotation vectors about world axes at bind, as the GLB's extras.rig says)
+  applyRig(frame) {
+    const r = this.rig;
+    const head = new THREE.Vector3();
+    for (const [code, axis] of Object.entries(r.head_rot)) {
+      const v = frame[code] || 0;
+      if (v) head.add(new THREE.Vector3(...axis).multiplyScalar(v));
+    }
+    for (const [name, joint] of Object.entries(this.joints)) {
+      const rv = new THREE.Vector3(...(r.rest[name] || [0, 0, 0]));
+      rv.addScaledVector(head, r.head_share[name] || 0);
+      for (const [chan, bones] of Object.entries(r.body)) {
+        const v = frame[chan] || 0;
+        if (v && bones[name]) rv.add(new THREE.Vector3(...bones[name]).multiplyScalar(v));
+      }
+      const a = rv.length();
+      joint.quaternion.copy(a > 1e-9 ? new THREE.Quaternion().setFromAxisAngle(rv.divideScalar(a), a)
+                                     : new THREE.Quaternion());
+      if (name === r.translate_joint) {
+        if (!joint.userData.rest) joint.userData.rest = joint.position.clone();
+        const t = joint.userData.rest.clone();
+        for (const [code, vec] of Object.entries(r.head_translate_m)) {
+          const v = frame[code] || 0;
+          if (v) t.add(new THREE.Vector3(...vec).multiplyScalar(v));
+        }
+        joint.position.copy(t);
+      }
+    }
   }
 
   // {target name: largest influence over all meshes} — what the tests read
