@@ -147,8 +147,6 @@ def test_mp4_export_runs_once_and_says_so(studio):
     assert pg.is_enabled("#btn-export-mp4")
 
 
-@pytest.mark.xfail(strict=False, reason="numbers are read by mimika.speech's text handling, "
-                   "which issue 16 fixes; the studio shows the words it returns")
 def test_numbers_read_once_in_subtitles_and_speech_track(studio):
     """Bug: '12345' and '3.14159' were repeated word by word in the subtitle and Speech track."""
     pg = studio
@@ -157,7 +155,8 @@ def test_numbers_read_once_in_subtitles_and_speech_track(studio):
     pg.wait_for_function("mimikaStudio.player.key && mimikaStudio.player.mode === 'idle'")
     words = pg.evaluate("mimikaStudio.editor.words.map(w => w.text.trim())")
     assert not any(w.startswith(".14159") or w == "2345" for w in words), words
-    assert words.count("12345") <= 1
+    assert words.count("12345") == 1 and words.count("3.14159") == 1
+    assert words[:3] == ["I", "paid", "$100"]
 
 
 def test_gltf_export_of_a_project_with_unicode_name(studio):
