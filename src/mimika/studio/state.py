@@ -96,9 +96,9 @@ class StudioState:
         self.projects_dir = Path(projects_dir)
         self.projects_dir.mkdir(parents=True, exist_ok=True)
         names = head_names()
-        if head not in names:
-            raise DataError(f"studio head {head!r} is not one of the heads here: "
-                            f"{', '.join(names)} (run 'mimika heads')")
+        if head not in names and not Path(head).exists():
+            raise DataError(f"studio head {head!r} is not one of the heads here "
+                            f"({', '.join(names)}) nor a file (run 'mimika heads')")
         self.head_name = head
         self.library_path = Path(library_path) if library_path is not None else None
         self.controller_path = controller_path
@@ -121,7 +121,7 @@ class StudioState:
         """``name`` checked against :func:`list_heads` (default: the studio's start-up head)."""
         if name is None or name == self.head_name:
             return self.head_name
-        infos = {h.name: h for h in head_infos()}
+        infos = {h.name: h for h in self.head_infos()}
         if name not in infos:
             raise ParameterError(f"there is no head called {name!r}; heads: "
                                  f"{', '.join(infos)}")
@@ -129,6 +129,19 @@ class StudioState:
             raise DataError(f"the {name} head is not installed on this computer (see "
                             "'mimika heads')")
         return name
+
+    def head_infos(self) -> list[Any]:
+        """The heads the page offers: :func:`head_infos` plus the start-up head when it is a
+        file (a character file or glTF avatar)."""
+        infos = head_infos()
+        if self.head_name not in {h.name for h in infos}:
+            from mimika.face.heads import HeadInfo
+
+            infos.append(HeadInfo(self.head_name, "file", True, f"from {self.head_name}"))
+        return infos
+
+    def head_names(self) -> list[str]:
+        return [h.name for h in self.head_infos()]
 
     def _entry(self, name: str | None) -> list[Any]:
         name = self.head(name)

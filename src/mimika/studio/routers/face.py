@@ -40,11 +40,10 @@ def aus() -> dict[str, Any]:
 def heads(request: Request) -> dict[str, Any]:
     """Every head :func:`mimika.face.heads.list_heads` knows, whether it is installed here, and
     the studio's default head."""
-    from mimika.studio.state import head_infos
-
-    return {"default": state_of(request).head_name,
+    st = state_of(request)
+    return {"default": st.head_name,
             "heads": [{"name": h.name, "rig": h.rig, "available": h.available,
-                       "description": h.description} for h in head_infos()]}
+                       "description": h.description} for h in st.head_infos()]}
 
 
 HeadName = Query(None, max_length=200, description="a head from /api/heads (default: the "

@@ -19,11 +19,10 @@ router = APIRouter(prefix="/api", tags=["projects"])
 def _validate(doc: Any, name: str, st: Any) -> Any:
     """The project of ``doc`` as the studio can use it (see :mod:`mimika.studio.checks`)."""
     from mimika.studio.checks import check_project
-    from mimika.studio.state import head_names
 
     with st.library_lock:
         lib = st.library()
-    return check_project(doc, name, library=lib, heads=head_names())
+    return check_project(doc, name, library=lib, heads=st.head_names())
 
 
 @router.get("/projects")
