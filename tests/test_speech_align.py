@@ -89,8 +89,12 @@ def test_cli_errors_exit_2(cli, tmp_path, capsys):
     assert "text is empty" in capsys.readouterr().err
     assert cli(["say", "hi", "-o", str(tmp_path / "a.mp3")]) == 2
     write_wav(tmp_path / "s.wav", np.zeros(22050, np.float32), sr=22050)
-    assert cli(["align", str(tmp_path / "s.wav"), "-o", str(tmp_path / "t.json")]) == 2
-    assert "exactly one of --transcript" in capsys.readouterr().err
+    (tmp_path / "t.txt").write_text("hello")
+    assert cli(["align", str(tmp_path / "s.wav"), "--transcript", "hello", "--transcript-file",
+                str(tmp_path / "t.txt"), "-o", str(tmp_path / "t.json")]) == 2
+    assert "not both" in capsys.readouterr().err
+    assert cli(["align", str(tmp_path / "s.wav")]) == 2
+    assert "nothing to write" in capsys.readouterr().err
 
 
 def test_cli_voices(cli, capsys):

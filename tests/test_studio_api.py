@@ -34,15 +34,20 @@ def project_doc(text: str = "Hello there.", events: list | None = None) -> dict:
                                             "onset": 0.3, "offset": 0.4}]}]}}
 
 
+#: the studio answers only the Host names it serves (DNS rebinding): the tests use its address
+BASE = "http://127.0.0.1:8765"
+LIVE = "ws://127.0.0.1:8765/api/live"
+
+
 @pytest.fixture(scope="module")
 def app(tmp_path_factory):
     d = tmp_path_factory.mktemp("studio")
-    return create_app(d / "projects", library_path=d / "expressions.json")
+    return create_app(d / "projects", library_path=d / "expressions.json", head="builtin")
 
 
 @pytest.fixture(scope="module")
 def client(app):
-    with TestClient(app) as c:
+    with TestClient(app, base_url=BASE) as c:
         yield c
 
 
@@ -98,9 +103,9 @@ def test_blend_disabled_rule(client):
 
 
 @pytest.mark.parametrize("body, needle", [
-    ({"aus": {"AU99": 1}}, "unknown Action Unit"),
+    ({"aus": {"AU99": 1}}, "nknown Action Unit"),
     ({"aus": {"AU12": 1.5}}, "outside [0, 1]"),
-    ({"aus": {"AU12": "lots"}}, "aus"),
+    ({"aus": {"AU12": "lots"}}, "Action Units"),
     ({"aus": {f"AU{i:02d}": 0.1 for i in range(1, 67)} | {"x": 1}}, ""),
     ({"aus": {}, "bogus": 1}, "bogus"),
 ])
@@ -121,18 +126,26 @@ def test_expressions_create_list_delete(client):
     assert r.status_code == 201 and r.json()["aus"] == {"AU12L": 0.7}
     d = client.get("/api/expressions").json()
     assert "smirk-test" in d["user"]
-    assert "already exists" in err(client.post("/api/expressions", json={
-        "name": "smirk-test", "aus": {"AU12": 1}}), 400)
+    r = client.post("/api/expressions", json={"name": "smirk-test", "aus": {"AU12": 1}})
+    assert "already an expression" in err(r, 409)
+    assert r.json()["code"] == "exists" and not r.json()["builtin"]
+    assert "/" not in r.json()["error"] and "--" not in r.json()["error"]
+    r = client.post("/api/expressions", json={"name": "smirk-test", "aus": {"AU12": 1},
+                                              "force": True})
+    assert r.status_code == 201 and r.json()["aus"] == {"AU12": 1.0}
     assert client.delete("/api/expressions/smirk-test").json() == {"deleted": "smirk-test"}
     assert "smirk-test" not in client.get("/api/expressions").json()["user"]
 
 
 def test_expressions_errors(client):
     assert "built-in" in err(client.delete("/api/expressions/happiness"), 400)
-    assert "shadow" in err(client.post("/api/expressions", json={
-        "name": "happiness", "aus": {"AU12": 1}}), 400)
-    err(client.post("/api/expressions", json={"name": "../x", "aus": {"AU12": 1}}), 422)
-    assert "at least one AU" in err(client.post("/api/expressions", json={
+    r = client.post("/api/expressions", json={"name": "happiness", "aus": {"AU12": 1}})
+    assert "built-in" in err(r, 409) and r.json()["builtin"]
+    assert "built-in" in err(client.post("/api/expressions", json={
+        "name": "astonishment", "aus": {"AU12": 1}}), 409)
+    msg = err(client.post("/api/expressions", json={"name": "../x", "aus": {"AU12": 1}}), 422)
+    assert "may only contain letters" in msg and "^[" not in msg  # no regex shown
+    assert "at least one Action Unit" in err(client.post("/api/expressions", json={
         "name": "empty", "aus": {}}), 400)
 
 
@@ -151,7 +164,8 @@ def test_project_roundtrip(client):
 
 
 BAD_NAMES = ["..", "../evil", "a/b", "/etc/passwd", "a.b", ".hidden", "a\\b", " lead", "x" * 65,
-             "con", "tab\tname", "ünïcode", "a:b", "%2e%2e"]
+             "con", "tab\tname", "a:b", "%2e%2e", "trail ", "a\u202eb", "ü" * 101, "x\x00y"]
+GOOD_NAMES = ["-dash-first", "Grüße aus Köln", "Zażółć gęślą jaźń", "news_2024-05", "日本語"]
 
 
 @pytest.mark.parametrize("name", BAD_NAMES)
@@ -164,6 +178,17 @@ def test_project_names_cannot_escape(client, app, name, tmp_path):
     assert 400 <= r.status_code < 500 and "error" in r.json()
     root = app.state.studio.projects_dir
     assert not any(p.name.startswith("evil") for p in root.parent.rglob("*"))
+
+
+@pytest.mark.parametrize("name", GOOD_NAMES)
+def test_project_names_in_any_script(client, app, name):
+    from urllib.parse import quote
+
+    assert check_project_name(name) == name
+    r = client.put(f"/api/projects/{quote(name, safe='')}", json=project_doc())
+    assert r.status_code == 200, r.text
+    assert (app.state.studio.projects_dir / f"{name}.json").is_file()
+    assert name in [p["name"] for p in client.get("/api/projects").json()["projects"]]
 
 
 def test_project_path_stays_inside(tmp_path):
@@ -181,7 +206,7 @@ def test_project_validation_lists_problems(client):
     assert "settings.fps" in msg and len(r.json()["problems"]) == 2
     doc = project_doc()
     doc["settings"]["head"] = "/etc/some.obj"
-    assert "settings.head" in err(client.put("/api/projects/bad", json=doc), 422)
+    assert "the studio has the heads" in err(client.put("/api/projects/bad", json=doc), 422)
     err(client.put("/api/projects/bad", json=[1, 2]), 422)
 
 
@@ -246,7 +271,7 @@ def _drain(ws):
 
 
 def test_live_websocket_streams_per_sentence(client):
-    with client.websocket_connect("/api/live") as ws:
+    with client.websocket_connect(LIVE) as ws:
         ws.send_text(json.dumps({"type": "ping"}))
         assert json.loads(ws.receive_text()) == {"type": "pong"}
         ws.send_text(json.dumps({"type": "speak", "id": 7, "text": "One. Two three.",
@@ -277,7 +302,7 @@ def test_live_refuses_other_origins(client):
     from starlette.websockets import WebSocketDisconnect
 
     with pytest.raises(WebSocketDisconnect), client.websocket_connect(
-            "/api/live", headers={"Origin": "http://evil.example"}) as ws:
+            LIVE, headers={"Origin": "http://evil.example"}) as ws:
         ws.receive_text()
 
 
@@ -325,8 +350,9 @@ def test_latent_feature_detected(client):
 
 # -- limits and errors ---------------------------------------------------------------------------
 def test_body_size_limit(tmp_path):
-    small = create_app(tmp_path / "p", library_path=tmp_path / "e.json", max_body=1000)
-    with TestClient(small) as c:
+    small = create_app(tmp_path / "p", library_path=tmp_path / "e.json", max_body=1000,
+                       head="builtin")
+    with TestClient(small, base_url=BASE) as c:
         big = {"aus": {"AU12": 0.5}, "disabled": ["x" * 2000]}
         assert "limit" in err(c.post("/api/blend", json=big), 413)
 
@@ -343,7 +369,7 @@ def test_body_size_limit(tmp_path):
 def test_cross_origin_writes_refused(client):
     r = client.post("/api/blend", json={"aus": {}}, headers={"Origin": "http://evil.example"})
     assert "not allowed" in err(r, 403)
-    ok = client.post("/api/blend", json={"aus": {}}, headers={"Origin": "http://testserver"})
+    ok = client.post("/api/blend", json={"aus": {}}, headers={"Origin": BASE})
     assert ok.status_code == 200
 
 

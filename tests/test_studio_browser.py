@@ -7,105 +7,39 @@ without them these tests skip with the command to run.
 from __future__ import annotations
 
 import json
-import os
-import socket
-import threading
-import time
 from pathlib import Path
 
 import pytest
 
+from studio_helpers import record, recorded, weights
+
 pytestmark = pytest.mark.browser
-
-CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--no-first-run",
-        "--autoplay-policy=no-user-gesture-required"]
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory):
-    pytest.importorskip("fastapi")
-    uvicorn = pytest.importorskip("uvicorn")
-    from mimika.errors import DataError
-    from mimika.studio.app import create_app
-    from mimika.studio.assets import ensure_vendor
-
-    try:
-        ensure_vendor()
-    except DataError as e:
-        pytest.skip(str(e))
-    d = tmp_path_factory.mktemp("studio-browser")
-    app = create_app(d / "projects", library_path=d / "expressions.json", warm_up=True)
-    port = _free_port()
-    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
-                                        ws_max_size=2 * 1024 * 1024))
-    th = threading.Thread(target=srv.run, daemon=True)
-    th.start()
-    t0 = time.time()
-    while not srv.started:
-        if time.time() - t0 > 30:
-            pytest.fail("studio server did not start")
-        time.sleep(0.05)
-    yield {"url": f"http://127.0.0.1:{port}/", "dir": d}
-    srv.should_exit = True
-    th.join(10)
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not os.path.exists(CHROMIUM):
-        pytest.skip("Chromium is missing: run scripts/setup-browser.sh "
-                    "(sudo apt-get install -y chromium)")
-    sync_api = pytest.importorskip("playwright.sync_api")
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        yield b
-        b.close()
+pytest_plugins = ["studio_pages"]  # fixtures: server, browser, open_studio, studio
 
 
 @pytest.fixture
-def page(browser, server):
-    ctx = browser.new_context(viewport={"width": 1440, "height": 900}, accept_downloads=True)
-    pg = ctx.new_page()
-    errors: list[str] = []
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.goto(server["url"])
-    pg.wait_for_function("window.mimikaStudio && window.mimikaStudio.ready === true",
-                         timeout=90_000)
-    yield pg
-    ctx.close()
-    assert not errors, errors
-
-
-def weights(pg) -> dict[str, float]:
-    return pg.evaluate("mimikaStudio.weights()")
+def page(studio):
+    return studio
 
 
 def test_au12_slider_moves_the_morph_target(page):
     assert weights(page).get("AU12", 0) == 0
-    page.locator('input[data-code="AU12"]').fill("0.8")
+    page.locator('input[type=range][data-code="AU12"]').fill("0.8")
     page.wait_for_function("mimikaStudio.weights().AU12 > 0.79")
     # AU Blender trace: AU15 strong suppresses AU12
-    page.locator('input[data-code="AU15"]').fill("1")
+    page.locator('input[type=range][data-code="AU15"]').fill("1")
     page.wait_for_function("document.getElementById('trace').textContent.includes('12<15Z')")
     page.wait_for_function("mimikaStudio.weights().AU12 < 0.01")
     # left/right toggle splits AU12 into AU12L and AU12R
-    page.locator('input[data-code="AU15"]').fill("0")
-    page.click("button[aria-label='AU12 left/right']")
-    page.locator('input[data-code="AU12L"]').fill("0.5")
+    page.locator('input[type=range][data-code="AU15"]').fill("0")
+    page.click("button[aria-label='AU12 L/R (left and right separately)']")
+    page.locator('input[type=range][data-code="AU12L"]').fill("0.5")
     page.wait_for_function("mimikaStudio.weights().AU12L > 0.49")
     assert weights(page)["AU12R"] == pytest.approx(0.8, abs=0.01)
 
 
 def test_head_and_eye_sliders_turn_joints(page):
-    page.locator('input[data-code="AU51"]').fill("1")
+    page.locator('input[type=range][data-code="AU51"]').fill("1")
     q = page.evaluate("mimikaStudio.viewer.headJoint.quaternion.toArray()")
     assert abs(q[3]) < 0.99
 
@@ -118,44 +52,35 @@ REPLAY_STATE = """(() => { const p = mimikaStudio.player, a = p.audio; return {
 
 def test_speak_plays_audio_and_moves_the_mouth(page, record_property):
     page.fill("#speech-text", "Hello, this is the news. We talk about the weather.")
+    record(page)
     page.click("#btn-speak")
-    page.wait_for_function("mimikaStudio.metrics().firstMotionMs !== undefined", timeout=20_000)
-    mouth = ("(() => { const w = mimikaStudio.weights(); return Math.max(w.AU25||0, w.AU26||0,"
-             " w.AU22||0, w.AU18||0, w.AU24||0); })()")
-    seen, clock = 0.0, []
-    for _ in range(30):
-        seen = max(seen, page.evaluate(mouth))
-        clock.append(page.evaluate("mimikaStudio.clock()"))
-        page.wait_for_timeout(50)
-    assert seen > 0.1
-    live = [c for c in clock if c is not None]
-    assert live and live[-1] > live[0]  # the audio clock advances
+    page.wait_for_function("mimikaStudio.player.mode === 'idle' && mimikaStudio.player.key")
+    live = [f for f in recorded(page) if f["mode"] == "live" and f["clock"] is not None]
+    assert max(f["mouth"] for f in live) > 0.1
+    clock = [f["clock"] for f in live]
+    assert len(set(clock)) > 1 and clock[-1] > clock[0]  # the audio clock advances
+    assert any("news" in f["subtitle"] or "weather" in f["subtitle"] for f in live)
     m = page.evaluate("mimikaStudio.metrics()")
     record_property("speak_to_first_audio_ms", m["firstAudioMs"])
     record_property("speak_to_first_motion_ms", m["firstMotionMs"])
     print("studio latency:", json.dumps({k: m.get(k) for k in (
         "firstAudioMs", "firstMotionMs", "serverFirstAudioMs", "outputLatencyMs")}))
-    # subtitles show the sentence
-    assert "news" in page.inner_text("#subtitle") or "weather" in page.inner_text("#subtitle")
-    page.wait_for_function("mimikaStudio.player.mode === 'idle' && mimikaStudio.player.key",
-                           timeout=20_000)
     # replay through <audio>: its currentTime is the clock
+    record(page)
     page.click("#btn-play")
     try:
         page.wait_for_function("mimikaStudio.audio().currentTime > 0.3", timeout=30_000)
     except Exception:
         state = page.evaluate(REPLAY_STATE)
         pytest.fail(f"replay did not advance the <audio> clock: {state}")
-    seen = 0.0
-    for _ in range(15):
-        seen = max(seen, page.evaluate(mouth))
-        page.wait_for_timeout(40)
-    assert seen > 0.1
-    page.click("#btn-stop")
+    page.wait_for_function("mimikaStudio.player.mode === 'idle'")
+    played = [f for f in recorded(page) if f["mode"] == "audio"]
+    assert max(f["mouth"] for f in played) > 0.1
+    assert any("weather" in f["subtitle"] for f in played)
 
 
 def test_timeline_drag_and_trigger_panel(page):
-    page.click("button[aria-label='add to Expressions']")
+    page.click("button[aria-label='Add a trigger to Expressions']")
     ev = page.locator(".lane[data-track='face'] .ev").first
     box = ev.bounding_box()
     start0 = page.evaluate("mimikaStudio.project.timeline.channels"
@@ -185,10 +110,10 @@ def test_timeline_drag_and_trigger_panel(page):
 
 def test_save_reload_same_project(page, server):
     page.fill("#speech-text", "Saved words.")
-    page.click("button[aria-label='add to Expressions']")
-    page.click("button[aria-label='add to Head']")
-    page.click("button[aria-label='add to Gaze']")
-    page.click("button[aria-label='add to Blinks']")
+    page.click("button[aria-label='Add a trigger to Expressions']")
+    page.click("button[aria-label='Add a trigger to Head']")
+    page.click("button[aria-label='Add a trigger to Gaze']")
+    page.click("button[aria-label='Add a trigger to Blinks']")
     page.fill("#project-name", "browser-test")
     page.click("#btn-save")
     page.wait_for_selector(".toast.ok")
@@ -196,7 +121,7 @@ def test_save_reload_same_project(page, server):
     on_disk = json.loads((Path(server["dir"]) / "projects" / "browser-test.json").read_text())
     page.reload()
     page.wait_for_function("window.mimikaStudio && window.mimikaStudio.ready === true",
-                           timeout=90_000)
+                           timeout=120_000)
     page.wait_for_selector("#project-list option[value='browser-test']", state="attached")
     page.select_option("#project-list", "browser-test")
     page.click("#btn-load")
@@ -213,7 +138,7 @@ def test_invalid_project_name_is_rejected_in_the_ui(page, server):
     page.fill("#project-name", "../evil")
     page.click("#btn-save")
     toast = page.wait_for_selector(".toast.error")
-    assert "not allowed" in toast.inner_text()
+    assert "cannot be a project name" in toast.inner_text()
     assert not list(Path(server["dir"]).rglob("evil*"))
 
 
@@ -222,22 +147,24 @@ def test_mp4_export_says_when_unavailable(page):
     page.evaluate("mimikaStudio.state.status.features.mp4 = false;"
                   "mimikaStudio.state.status.features.mp4_reason = "
                   "\"MP4 export isn't available: av is not installed\"")
+    page.click("#export-menu summary")
     page.click("#btn-export-mp4")
     assert "isn't available" in page.wait_for_selector(".toast.error").inner_text()
 
 
 def test_gltf_export_downloads(page):
-    page.locator('input[data-code="AU12"]').fill("1")
+    page.locator('input[type=range][data-code="AU12"]').fill("1")
     with page.expect_download() as d:
+        page.click("#export-menu summary")
         page.click("#btn-export-gltf")
     path = d.value.path()
     assert Path(path).read_bytes()[:4] == b"glTF"
 
 
 def test_screenshot(page, tmp_path):
-    page.locator('input[data-code="AU12"]').fill("0.7")
-    page.locator('input[data-code="AU06"]').fill("0.5")
-    page.wait_for_timeout(200)
+    page.locator('input[type=range][data-code="AU12"]').fill("0.7")
+    page.locator('input[type=range][data-code="AU06"]').fill("0.5")
+    page.wait_for_function("mimikaStudio.weights().AU06 > 0.49")
     out = tmp_path / "studio.png"
     page.screenshot(path=str(out))
     assert out.stat().st_size > 20_000

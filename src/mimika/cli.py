@@ -10,11 +10,14 @@ import argparse
 import difflib
 import importlib
 import os
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 
 from mimika.commands import MODULES
 from mimika.errors import MimikaError
+from mimika.limits import OPTIONS, override
 
 
 class _Parser(argparse.ArgumentParser):
@@ -39,11 +42,28 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+class Terminated(BaseException):
+    """SIGTERM / SIGHUP arrived: unwind (temporary files removed, workers stopped), exit."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated(signum)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    old = {}
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGTERM, signal.SIGHUP):
+            old[sig] = signal.signal(sig, _terminate)
     try:
-        return int(args.func(args) or 0)
+        given = {k: getattr(args, k) for k in OPTIONS if getattr(args, k, None) is not None}
+        with override(**given):
+            return int(args.func(args) or 0)
+    except Terminated as e:
+        print(f"mimika: stopped by signal {e.args[0]}", file=sys.stderr)
+        return 128 + int(e.args[0])
     except MimikaError as e:
         if args.debug:
             raise
@@ -55,3 +75,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`, which has closed
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)

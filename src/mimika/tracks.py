@@ -13,6 +13,7 @@ import numpy as np
 
 from mimika.errors import ParameterError
 from mimika.facs import parse_au
+from mimika.limits import check_fps, check_frames
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -22,11 +23,9 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 def valid_fps(fps: float) -> float:
-    """Return ``fps`` as float or raise ``ParameterError`` if it is not a positive finite number."""
-    f = float(fps)
-    if not np.isfinite(f) or f <= 0:
-        raise ParameterError(f"fps={fps!r} must be > 0")
-    return f
+    """Return ``fps`` as float or raise ``ParameterError`` if it is not a positive finite number
+    (or over :attr:`mimika.limits.Limits.max_fps`)."""
+    return check_fps(fps)
 
 
 @dataclass(frozen=True)
@@ -75,6 +74,7 @@ class AUTrack:
     def constant(cls, aus: Mapping[str, float], *, n_frames: int = 1, fps: float = 25.0):
         """A track holding ``aus`` for ``n_frames`` frames."""
         chans = tuple(aus)
+        check_frames(n_frames, "the constant track")
         vals = np.tile(np.array([aus[c] for c in chans], dtype=np.float32), (n_frames, 1))
         return cls(vals.reshape(n_frames, len(chans)), chans, fps)
 
@@ -149,7 +149,8 @@ def resample_values(values: np.ndarray, *, src_fps: float, dst_fps: float) -> np
     """Linearly resample frames (shape (T, K)) from ``src_fps`` to ``dst_fps``."""
     src_fps, dst_fps = valid_fps(src_fps), valid_fps(dst_fps)
     t_src = np.arange(values.shape[0]) / src_fps
-    n_dst = max(1, round(values.shape[0] * dst_fps / src_fps))
+    n_dst = check_frames(max(1, round(values.shape[0] * dst_fps / src_fps)),
+                         f"resampling to {dst_fps:g} fps")
     t_dst = np.arange(n_dst) / dst_fps
     return np.stack(
         [np.interp(t_dst, t_src, values[:, k]) for k in range(values.shape[1])], axis=1

@@ -85,7 +85,8 @@ class Plan:
                 "animation": None if s.animation is None else {
                     "onset": s.animation.onset, "apex": s.animation.apex,
                     "offset": s.animation.offset, "fps": s.animation.fps,
-                    "ease": s.animation.ease}}
+                    "ease": s.animation.ease, "speech": s.animation.speech,
+                    "audio": s.animation.audio, "lang": s.animation.lang}}
 
 
 @lru_cache(maxsize=8)
@@ -126,7 +127,7 @@ def _slug(text: str) -> str:
 def _head_tags(heads: tuple[str, ...]) -> dict[str, str]:
     tags: dict[str, str] = {}
     for h in heads:
-        tag = h if h in ("builtin", "ict") else _slug(Path(h).stem if h.endswith(".obj")
+        tag = h if h in ("builtin", "ict") else _slug(Path(h).stem if Path(h).suffix
                                                         else Path(h).name)
         base, n = tag, 2
         while tag in tags.values():

@@ -30,6 +30,7 @@ from mimika.batch.plan import Item, Plan, make_plan
 from mimika.batch.spec import BatchSpec
 from mimika.errors import DataError, ParameterError
 from mimika.io.atomic import atomic_write
+from mimika.limits import loads_json
 
 log = logging.getLogger(__name__)
 
@@ -111,8 +112,8 @@ def read_manifest(out: Path) -> dict[str, Any] | None:
     if not p.exists():
         return None
     try:
-        data = json.loads(p.read_text("utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        data = loads_json(p.read_bytes(), str(p))
+    except (OSError, DataError) as e:
         raise DataError(f"cannot read {p}: {e}; delete it to start over (finished images are "
                         "then rendered again)") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT:

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from mimika.errors import DataError, MimikaError
+from mimika.face.heads import DEFAULT_HEAD
 from mimika.facs.catalogue import SEED_AUS, parse_au, parse_intensity
 
 log = logging.getLogger(__name__)
@@ -36,7 +37,7 @@ TOP_KEYS = ("name", "aus", "expressions", "intensities", "neutral", "sample", "h
             "identities", "views", "size", "samples", "blend", "disabled_rules", "seed",
             "animation")
 SAMPLE_KEYS = ("count", "pool", "min_aus", "max_aus", "range", "levels")
-ANIMATION_KEYS = ("onset", "apex", "offset", "fps", "format", "ease")
+ANIMATION_KEYS = ("onset", "apex", "offset", "fps", "format", "ease", "speech", "audio", "lang")
 
 
 class SpecError(DataError):
@@ -70,6 +71,11 @@ class AnimationSpec:
     #: auto (mp4 where PyAV video output is available, else gif) | mp4 | gif | strip
     format: str = "auto"
     ease: str | None = None
+    #: spoken clips: the text (lip-sync; the item's AUs rise over ``onset`` and fall over
+    #: ``offset`` around it), a recording of it (absolute path; else espeak-ng) and its language
+    speech: str | None = None
+    audio: str | None = None
+    lang: str = "en"
 
     @property
     def duration(self) -> float:
@@ -90,7 +96,7 @@ class BatchSpec:
     intensities: tuple[float, ...] = (1.0,)
     neutral: bool = False
     sample: SampleSpec | None = None
-    heads: tuple[str, ...] = ("builtin",)
+    heads: tuple[str, ...] = (DEFAULT_HEAD,)
     identities: tuple[Identity, ...] = (None,)
     views: tuple[str, ...] = ("front",)
     size: tuple[int, int] = (320, 240)
@@ -124,48 +130,11 @@ class BatchSpec:
 
 # -- YAML with line numbers -------------------------------------------------------------------
 def _read_yaml(text: str, source: str) -> tuple[Any, dict[Path_, int]]:
-    """Parse ``text`` into plain data plus the 1-based line of every key and list item."""
-    try:
-        import yaml
-    except ImportError as e:
-        raise SpecError(f"reading batch specs needs PyYAML ({e}); install it with: "
-                        "pip install 'mimika[batch]'") from None
+    """Parse ``text`` into plain data plus the 1-based line of every key and list item
+    (safely: :mod:`mimika.batch.yamlload`)."""
+    from mimika.batch.yamlload import read_yaml
 
-    lines: dict[Path_, int] = {}
-    loader = yaml.SafeLoader(text)
-    try:
-        try:
-            root = loader.get_single_node()
-        except yaml.YAMLError as e:
-            mark = getattr(e, "problem_mark", None) or getattr(e, "context_mark", None)
-            where = f"{source}:{mark.line + 1}:{mark.column + 1}" if mark else source
-            problem = getattr(e, "problem", None) or str(e)
-            raise SpecError(f"{where}: invalid YAML: {problem}") from None
-        if root is None:
-            return None, lines
-
-        def conv(node: Any, path: Path_) -> Any:
-            lines.setdefault(path, node.start_mark.line + 1)
-            if isinstance(node, yaml.MappingNode):
-                out: dict[Any, Any] = {}
-                for k, v in node.value:
-                    key = loader.construct_object(k, deep=True)
-                    if not isinstance(key, str | int):
-                        raise SpecError(f"{source}:{k.start_mark.line + 1}: keys must be text, "
-                                        f"not {key!r}")
-                    if key in out:
-                        raise SpecError(f"{source}:{k.start_mark.line + 1}: "
-                                        f"{_where((*path, key))} is given twice")
-                    lines[(*path, key)] = k.start_mark.line + 1
-                    out[key] = conv(v, (*path, key))
-                return out
-            if isinstance(node, yaml.SequenceNode):
-                return [conv(v, (*path, i)) for i, v in enumerate(node.value)]
-            return loader.construct_object(node, deep=True)
-
-        return conv(root, ()), lines
-    finally:
-        loader.dispose()
+    return read_yaml(text, source, error=SpecError)
 
 
 def _where(path: Path_) -> str:
@@ -286,14 +255,16 @@ def _au_set(c: _Checker, v: Any, path: Path_) -> tuple[tuple[str, float], ...]:
 
 
 def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
+    from mimika.face.makehuman.character_file import preset_names
+
     out = []
     for i, h in enumerate(c.seq(v, ("heads",))):
         p = ("heads", i)
         if not isinstance(h, str) or not h.strip():
-            raise c.error(p, f"{_show(h)} is not a head (use builtin, ict, an ICT-FaceKit folder "
-                             "or an .obj file)")
+            raise c.error(p, f"{_show(h)} is not a head (use a character, builtin, ict, an "
+                             "ICT-FaceKit folder or an .obj file)")
         h = h.strip()
-        if h == "builtin":
+        if h == "builtin" or h in preset_names():
             out.append(h)
             continue
         if h == "ict":
@@ -308,15 +279,17 @@ def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
         path = Path(os.path.expanduser(h))
         if not path.is_absolute() and base is not None:
             path = base / path
-        if path.is_dir() or path.suffix.lower() in (".obj", ".glb", ".gltf", ".vrm"):
+        if path.is_dir() or path.suffix.lower() in (".obj", ".glb", ".gltf", ".vrm", ".yaml",
+                                                     ".yml", ".json"):
             if not path.exists():
                 raise c.error(p, f"head file {str(path)!r} does not exist")
             out.append(str(path.resolve()))
             continue
-        close = difflib.get_close_matches(h, ["builtin", "ict"], n=1)
+        close = difflib.get_close_matches(h, ["builtin", "ict", *preset_names()], n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise c.error(p, f"unknown head {h!r}{hint} (use builtin, ict, an ICT-FaceKit folder, "
-                         "a glTF/GLB/VRM character or an .obj file; run 'mimika heads')")
+        raise c.error(p, f"unknown head {h!r}{hint} (use a character such as "
+                         f"{preset_names()[0]} or a .yaml file, builtin, ict, an ICT-FaceKit "
+                         "folder, a glTF/GLB/VRM avatar or an .obj file; run 'mimika heads')")
     if len(set(out)) != len(out):
         raise c.error(("heads",), "a head is listed twice")
     if not out:
@@ -398,7 +371,35 @@ def _sample(c: _Checker, v: Any) -> SampleSpec:
                       levels=levels)
 
 
-def _animation(c: _Checker, v: Any, size: tuple[int, int]) -> AnimationSpec | None:
+def _speech(c: _Checker, d: Mapping[str, Any], base: Path | None) -> dict[str, Any]:
+    """``speech``/``audio``/``lang`` of a spoken clip (audio paths relative to the spec)."""
+    a = ("animation",)
+    kw: dict[str, Any] = {}
+    if "speech" in d:
+        if not isinstance(d["speech"], str) or not d["speech"].strip():
+            raise c.error((*a, "speech"), "speech must be the text to speak")
+        kw["speech"] = d["speech"]
+    if "audio" in d:
+        if "speech" not in kw:
+            raise c.error((*a, "audio"), "audio needs speech: the text spoken in the recording")
+        path = Path(str(d["audio"])).expanduser()
+        if not path.is_absolute() and base is not None:
+            path = base / path
+        if not path.is_file():
+            raise c.error((*a, "audio"), f"recording {str(path)!r} does not exist")
+        kw["audio"] = str(path.resolve())
+    if "lang" in d:
+        from mimika.speech.espeak import check_lang
+
+        try:
+            kw["lang"] = check_lang(str(d["lang"]))
+        except MimikaError as e:
+            raise c.error((*a, "lang"), str(e)) from None
+    return kw
+
+
+def _animation(c: _Checker, v: Any, size: tuple[int, int], base: Path | None = None
+               ) -> AnimationSpec | None:
     if v is None or v is False:
         return None
     if v is True:
@@ -427,6 +428,7 @@ def _animation(c: _Checker, v: Any, size: tuple[int, int]) -> AnimationSpec | No
             kw["ease"] = check_easing(str(d["ease"]))
         except MimikaError as e:
             raise c.error((*a, "ease"), str(e)) from None
+    kw.update(_speech(c, d, base))
     spec = AnimationSpec(**kw)
     if spec.duration <= 0:
         raise c.error(a, "onset + apex + offset must be > 0 seconds")
@@ -464,7 +466,7 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
     kw: dict[str, Any] = {}
     if "name" in d:
         kw["name"] = str(d["name"])
-    heads = _heads(c, d.get("heads", ["builtin"]), Path(base) if base is not None else None)
+    heads = _heads(c, d.get("heads", [DEFAULT_HEAD]), Path(base) if base is not None else None)
     kw["heads"] = heads
     kw["identities"] = _identities(c, d.get("identities"), heads)
 
@@ -547,7 +549,8 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
         kw["disabled_rules"] = tuple(rules)
     if "seed" in d:
         kw["seed"] = c.number(d["seed"], ("seed",), lo=0, integer=True)
-    kw["animation"] = _animation(c, d.get("animation"), size)
+    kw["animation"] = _animation(c, d.get("animation"), size,
+                                 Path(base) if base is not None else None)
     spec = BatchSpec(source=source, lines=dict(lines or {}), **kw)
     if not (spec.aus or spec.aus_keyword or spec.expressions or spec.sample or spec.neutral):
         raise c.error((), "the spec renders nothing: give 'aus', 'expressions', 'sample' or "
@@ -555,7 +558,26 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
     if "intensities" in d and not (spec.aus or spec.aus_keyword or spec.expressions):
         raise c.error(("intensities",), "intensities scale 'aus' and 'expressions'; the spec "
                                         "has neither")
+    _check_items(c, spec)
     return spec
+
+
+def item_count(spec: BatchSpec) -> int:
+    """How many items (images) ``spec`` renders — an upper bound for ``aus: modelled``."""
+    sets = 64 if spec.aus_keyword else len(spec.aus)
+    contents = (int(spec.neutral) + (sets + len(spec.expressions)) * len(spec.intensities)
+                + (spec.sample.count if spec.sample else 0))
+    faces = sum(len(spec.identities) if is_ict(h) else 1 for h in spec.heads)
+    return contents * faces * len(spec.views)
+
+
+def _check_items(c: _Checker, spec: BatchSpec) -> None:
+    from mimika import limits
+
+    n = item_count(spec)
+    if n > limits.current().max_items:
+        raise c.error(("sample", "count") if spec.sample else (),
+                      str(limits.over("max_items", f"the spec has {limits.fmt(n)} items")))
 
 
 def load_spec(path: str | os.PathLike) -> BatchSpec:

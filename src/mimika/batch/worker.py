@@ -8,6 +8,7 @@ Dask.
 
 from __future__ import annotations
 
+import functools
 import io
 import logging
 import os
@@ -71,22 +72,48 @@ def _png_bytes(img: np.ndarray) -> bytes:
     return buf.getvalue()
 
 
+@functools.lru_cache(maxsize=4)
+def _utterance(text: str, audio: str | None, lang: str) -> Any:
+    """The spoken text of a clip: espeak-ng, or aligned to the recording (once per worker)."""
+    if audio is None:
+        from mimika.speech import synthesize
+
+        return synthesize(text, lang=lang)
+    from mimika.speech import align
+    from mimika.speech.audio import read_media
+
+    rec, sr = read_media(audio)
+    return align(rec, sr=sr, transcript=text, lang=lang)
+
+
 def _clip_frames(rig: Any, renderer: Any, item: Mapping[str, Any],
-                 settings: Mapping[str, Any]) -> list[np.ndarray]:
-    """Onset–apex–offset frames of ``item``'s requested AUs (blended per frame)."""
+                 settings: Mapping[str, Any]) -> tuple[list[np.ndarray], Any]:
+    """Onset–apex–offset frames of ``item``'s requested AUs (blended per frame); a spoken
+    clip lasts its utterance, lip-synced (returned as the second value, else None)."""
     from mimika.timeline import Event, sample, timeline_from_events
 
     a = settings["animation"]
-    dur = a["onset"] + a["apex"] + a["offset"]
+    utt = _utterance(a["speech"], a.get("audio"), a.get("lang", "en")) if a.get("speech") \
+        else None
+    dur = utt.duration if utt is not None else a["onset"] + a["apex"] + a["offset"]
+    on, off = (min(a["onset"], dur / 2), min(a["offset"], dur / 2))
     ev = Event(kind="aus", start=0.0, duration=dur, aus=tuple(item["requested"].items()),
-               onset=a["onset"], offset=a["offset"], ease=a.get("ease"))
-    track = sample(timeline_from_events([ev]), fps=a["fps"], blend=bool(settings["blend"]),
+               onset=on, offset=off, ease=a.get("ease"))
+    blend = bool(settings["blend"])
+    track = sample(timeline_from_events([ev]), fps=a["fps"], blend=blend and utt is None,
                    disabled=settings["disabled_rules"], duration=dur)
+    if utt is not None:
+        from mimika.facs.blender import blend_track
+        from mimika.speech import combine, mouth_track
+
+        track = combine(mouth_track(utt, fps=a["fps"]), track)
+        track = blend_track(track) if blend else track
+        track = track.with_channels([c for c in track.channels if c in rig.supported])
     return [renderer.render(rig.deform(track.frame(i)), view=item["view"])
-            for i in range(track.n_frames)]
+            for i in range(track.n_frames)], utt
 
 
-def _encode_clip(frames: list[np.ndarray], fmt: str, fps: float) -> bytes:
+def _encode_clip(frames: list[np.ndarray], fmt: str, fps: float, utt: Any = None) -> bytes:
     if fmt == "strip":
         return _png_bytes(np.concatenate(frames, axis=1))
     if fmt == "gif":
@@ -100,9 +127,10 @@ def _encode_clip(frames: list[np.ndarray], fmt: str, fps: float) -> bytes:
     from mimika.render.video import VideoWriter
 
     h, w = frames[0].shape[:2]
+    sound = {} if utt is None else {"audio": utt.audio, "sr": utt.sr}
     with tempfile.TemporaryDirectory(prefix="mimika-batch-") as d:
         path = Path(d) / "clip.mp4"
-        with VideoWriter(path, fps=fps, size=(w, h), threaded=False) as vw:
+        with VideoWriter(path, fps=fps, size=(w, h), threaded=False, **sound) as vw:
             for f in frames:
                 vw.write(f)
         return path.read_bytes()
@@ -131,9 +159,9 @@ def render_items(items: Sequence[Mapping[str, Any]], settings: Mapping[str, Any]
                 last = (pose_key, rig.deform(rig.check(item["aus"])))
             res["png"] = _png_bytes(renderer.render(last[1], view=item["view"]))
             if item.get("clip") and settings.get("animation"):
-                frames = _clip_frames(rig, renderer, item, settings)
+                frames, utt = _clip_frames(rig, renderer, item, settings)
                 res["clip"] = _encode_clip(frames, settings["clip_format"],
-                                           settings["animation"]["fps"])
+                                           settings["animation"]["fps"], utt)
             res["ok"] = True
         except Exception as e:  # reported in the manifest; the run goes on
             log.warning("item %s failed: %s", item["id"], e)

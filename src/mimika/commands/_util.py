@@ -18,6 +18,27 @@ def size_arg(text: str) -> tuple[int, int]:
     return w, h
 
 
+#: help of the options that raise a limit (see mimika.limits and docs/limits.md)
+_LIMIT_HELP = {
+    "max_duration": ("SECONDS", float, "longest timeline or speech (default 3600)"),
+    "max_frames": ("N", int, "most frames in one track or video (default 250 000)"),
+    "max_text": ("CHARS", int, "largest text, script or article (default 500 000)"),
+    "max_items": ("N", int, "most items in one batch (default 100 000)"),
+    "max_export_seconds": ("SECONDS", float, "longest wall time of one export (default 600)"),
+    "max_body": ("BYTES", int, "largest request body or WebSocket message (default 2 MiB)"),
+}
+
+
+def limit_options(p: argparse.ArgumentParser, *names: str) -> None:
+    """Add ``--max-duration``-style options; ``mimika.cli.main`` applies the given ones."""
+    from mimika.limits import OPTIONS
+
+    g = p.add_argument_group("limits (docs/limits.md; also MIMIKA_MAX_… variables)")
+    for name in names:
+        metavar, kind, text = _LIMIT_HELP[name]
+        g.add_argument(OPTIONS[name], dest=name, type=kind, metavar=metavar, help=text)
+
+
 def progress_bar(quiet: bool, label: str) -> Callable[[int, int], None] | None:
     """A ``progress(done, total)`` callback drawing a bar on stderr (None when quiet/no TTY)."""
     if quiet or not sys.stderr.isatty():

@@ -5,16 +5,19 @@ from __future__ import annotations
 import argparse
 import sys
 
-from mimika.commands._util import progress_bar
+from mimika.commands._util import limit_options, progress_bar
 
 
 def cmd_batch(args: argparse.Namespace) -> int:
     from mimika.batch import load_spec, make_plan
     from mimika.batch.run import run_batch
     from mimika.errors import ParameterError
+    from mimika.limits import check_count
 
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers {args.workers} must be ≥ 1")
+    if args.workers is not None:
+        check_count("max_workers", args.workers, "--workers")
     if args.workers is not None and args.scheduler:
         raise ParameterError("--workers sizes the local cluster; do not combine it with "
                              "--scheduler")
@@ -69,4 +72,5 @@ def register(sub) -> None:
     q.add_argument("--show", type=int, default=10, metavar="K",
                    help="items listed by --dry-run (default 10)")
     q.add_argument("-q", "--quiet", action="store_true")
+    limit_options(q, "max_items")
     q.set_defaults(func=cmd_batch)

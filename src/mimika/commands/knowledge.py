@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 from mimika.errors import DataError, ParameterError
+from mimika.limits import loads_json
 
 
 def _fmt(v: float) -> str:
@@ -113,11 +114,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     events = []
     if args.events:
         try:
-            events = json.loads(Path(args.events).read_text("utf-8"))
+            events = loads_json(Path(args.events).read_bytes(), args.events)
         except OSError as e:
             raise DataError(f"cannot read events file {args.events!r}: {e.strerror}") from None
-        except json.JSONDecodeError as e:
-            raise DataError(f"{args.events}:{e.lineno}: not valid JSON: {e.msg}") from None
         if isinstance(events, dict):
             events = events.get("events", [])
         if not isinstance(events, list):

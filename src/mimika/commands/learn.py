@@ -10,6 +10,7 @@ import argparse
 import sys
 import time
 
+from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
 
 
@@ -120,4 +121,5 @@ def register(sub) -> None:
     r.add_argument("--head", default="builtin", help="head for the PNG strip and the MP4")
     r.add_argument("-o", "--output", required=True, help=".csv (AU CSV), .png or .mp4")
     r.add_argument("-q", "--quiet", action="store_true")
+    limit_options(r, "max_duration", "max_frames")
     r.set_defaults(func=cmd_transition)

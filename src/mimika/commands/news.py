@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import progress_bar, size_arg
+from mimika.commands._util import limit_options, progress_bar, size_arg
 from mimika.errors import DataError, ParameterError
 
 VIEWS = ("front", "three-quarter", "profile")
@@ -25,10 +25,17 @@ def _read_article(args: argparse.Namespace) -> tuple[str, str]:
                              "not both or neither")
     if args.example is not None:
         return example_bulletin(args.example), f"example bulletin ({args.example})"
+    from mimika.limits import check_text, current, over
+
     if args.article == "-":
-        return sys.stdin.read(), "<stdin>"
+        text = sys.stdin.read(current().max_text + 1)
+        check_text(text, "the article on stdin")
+        return text, "<stdin>"
     p = Path(args.article)
     try:
+        size = p.stat().st_size  # not read into memory when surely too long
+        if size > 4 * current().max_text:
+            raise over("max_text", f"article {str(p)!r} has at least {size // 4} characters")
         return p.read_text("utf-8"), str(p)
     except FileNotFoundError:
         raise DataError(f"article {str(p)!r} does not exist") from None
@@ -47,6 +54,7 @@ def _layers(args: argparse.Namespace) -> set[str]:
 
 
 def cmd_news(args: argparse.Namespace) -> int:
+    from mimika.limits import check_count
     from mimika.newsreader import parse_article, render_ablations, render_news
     from mimika.speech.espeak import check_lang
 
@@ -55,12 +63,20 @@ def cmd_news(args: argparse.Namespace) -> int:
     check_lang(lang)
     if args.workers is not None and args.workers < 1:
         raise ParameterError(f"--workers={args.workers} must be 1 or more")
+    if args.workers is not None:
+        check_count("max_workers", args.workers, "--workers")
     if args.ablations is None and args.output is None:
         raise ParameterError("give the output video with -o news.mp4 (or --ablations DIR)")
     article = parse_article(text, source=source)
+    if args.mood is not None:
+        from mimika.knowledge import get_mood
+
+        get_mood(args.mood)
+    if args.audio is not None and args.ablations is not None:
+        raise ParameterError("--audio works with -o, not with --ablations")
     kw = dict(lang=lang, head=args.head, fps=args.fps, size=args.size, view=args.view,
               voice=args.voice, rate=args.rate, samples=args.samples, seed=args.seed,
-              workers=args.workers)
+              workers=args.workers, mood=args.mood)
     if args.ablations is not None:
         def prog(name: str, done: int, total: int, _bars: dict = {}) -> None:  # noqa: B006
             bar = _bars.setdefault(name, progress_bar(args.quiet, f"{name:<18}"))
@@ -73,7 +89,7 @@ def cmd_news(args: argparse.Namespace) -> int:
         _say(args, f"ablation set: {len(results)} videos in {args.ablations}")
         return 0
     res = render_news(article, out=args.output, layers=_layers(args), aus=args.aus,
-                      progress=progress_bar(args.quiet, "rendering"), **kw)
+                      audio=args.audio, progress=progress_bar(args.quiet, "rendering"), **kw)
     wall = res.timings.get("total", 0.0)
     _say(args, f"wrote {res.video} ({res.n_frames} frames at {res.fps:g} fps, "
                f"{res.duration:.2f} s of speech, rendered in {wall:.1f} s = "
@@ -101,6 +117,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--lang", help="espeak language: en, de, pl … (default en)")
     p.add_argument("--head", default="builtin", help="builtin (default) or ict")
     p.add_argument("--voice", help="espeak voice variant (f3, m2, klatt …)")
+    p.add_argument("--audio", metavar="FILE",
+                   help="a recording of the article (WAV, MP3 …, any voice): align the text "
+                        "to it and use it as the sound instead of espeak-ng")
+    p.add_argument("--mood", help="mood of the behaviour (happy, depressed, nervous …): how "
+                                  "often and how strongly the reader nods, raises brows, smiles")
     p.add_argument("--rate", type=int, default=165, help="words per minute (165)")
     p.add_argument("--fps", type=float, default=25.0, help="frames per second (25)")
     p.add_argument("--size", type=size_arg, default=(640, 480),
@@ -120,4 +141,5 @@ def register(sub: argparse._SubParsersAction) -> None:
         name = FLAG_NAMES[feat]
         p.add_argument(f"--no-{name}", action="store_true", help=f"switch {name} off")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or messages")
+    limit_options(p, "max_duration", "max_frames", "max_text")
     p.set_defaults(func=cmd_news)

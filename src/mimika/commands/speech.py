@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
 
 VISEME_FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead", "ovr")
@@ -68,14 +69,16 @@ def cmd_say(args: argparse.Namespace) -> int:
 
 
 def cmd_align(args: argparse.Namespace) -> int:
-    from mimika.speech.alignment import align
-    from mimika.speech.audio import read_wav
+    from mimika.speech.alignment import align, recognise
+    from mimika.speech.audio import read_media
 
     _check_suffix(args.output, (".json",), "output")
     _check_suffix(args.aus, (".csv",), "--aus")
     _check_suffix(args.visemes, (".json", ".csv"), "--visemes")
-    if (args.transcript is None) == (args.transcript_file is None):
-        raise ParameterError("give exactly one of --transcript TEXT or --transcript-file FILE")
+    if args.transcript is not None and args.transcript_file is not None:
+        raise ParameterError("give one of --transcript TEXT or --transcript-file FILE, not both")
+    if not (args.output or args.aus or args.visemes):
+        raise ParameterError("nothing to write; give -o timing.json, --aus or --visemes")
     text = args.transcript
     if args.transcript_file:
         try:
@@ -83,16 +86,18 @@ def cmd_align(args: argparse.Namespace) -> int:
         except OSError as e:
             raise ParameterError(
                 f"cannot read --transcript-file {args.transcript_file!r}: {e}") from None
-    audio, sr = read_wav(args.audio)
-    utt = align(audio, sr=sr, transcript=text, lang=args.lang, voice=args.voice)
+    audio, sr = read_media(args.audio)
+    if text is None:
+        utt = recognise(audio, sr=sr, lang=args.lang)
+    else:
+        utt = align(audio, sr=sr, transcript=text, lang=args.lang, voice=args.voice,
+                    engine=args.engine)
     done = []
     if args.output:
         utt.save_timing(args.output)
         done.append(f"{args.output} ({len(utt.phonemes)} phones, {len(utt.words)} words, "
-                    f"{utt.duration:.2f} s, cost {utt.meta['alignment_cost']:.2f})")
+                    f"{utt.duration:.2f} s, {utt.meta['engine']})")
     done += _write_outputs(args, utt, sound_file=args.audio)
-    if not done:
-        raise ParameterError("nothing to write; give -o timing.json, --aus or --visemes")
     if not args.quiet:
         for d in done:
             print(f"wrote {d}")
@@ -149,15 +154,20 @@ def register(sub) -> None:
     q.add_argument("-o", "--output", metavar="FILE.wav", help="WAV file to write (16-bit mono)")
     q.add_argument("--timing", metavar="FILE.json", help="phoneme/word/sentence timing JSON")
     _outputs(q)
+    limit_options(q, "max_duration", "max_text")
     q.set_defaults(func=cmd_say)
 
-    a = sub.add_parser("align", help="recorded speech + transcript → phoneme timing, AUs, visemes")
-    a.add_argument("audio", help="PCM WAV file")
-    a.add_argument("--transcript", help="what is said")
+    a = sub.add_parser("align", help="recorded speech (+ transcript) → phoneme timing, AUs, "
+                                     "visemes; without a transcript the phones are recognised")
+    a.add_argument("audio", help="WAV file (MP3, M4A … through PyAV)")
+    a.add_argument("--transcript", help="what is said (without it: phone recognition)")
+    a.add_argument("--engine", default="auto", choices=("auto", "sphinx", "dtw"),
+                   help="auto: pocketsphinx for English, DTW against espeak-ng otherwise")
     a.add_argument("--transcript-file", metavar="FILE", help="read the transcript from a file")
     a.add_argument("--lang", default="en", help="espeak language of the transcript (en)")
     a.add_argument("-o", "--output", metavar="FILE.json", help="timing JSON to write")
     _outputs(a)
+    limit_options(a, "max_duration")
     a.set_defaults(func=cmd_align)
 
     v = sub.add_parser("voices", help="list espeak-ng voices (and --variants)")

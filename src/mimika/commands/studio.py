@@ -6,7 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from mimika.commands._util import limit_options
 from mimika.errors import ParameterError
+from mimika.face.heads import DEFAULT_HEAD
 
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
 
@@ -24,14 +26,15 @@ def cmd_studio(args: argparse.Namespace) -> int:
     except ImportError:
         raise ParameterError("mimika studio needs FastAPI and uvicorn: "
                              "pip install 'mimika[studio]'") from None
-    from mimika.studio.app import MAX_BODY, create_app
+    from mimika.studio.app import create_app
     from mimika.studio.assets import ensure_vendor
 
     if not 1 <= args.port <= 65535:
         raise ParameterError(f"--port {args.port} must be within 1…65535")
     ensure_vendor()
     projects = Path(args.projects) if args.projects else default_projects_dir()
-    app = create_app(projects, head=args.head, library_path=args.library, warm_up=True)
+    app = create_app(projects, head=args.head, library_path=args.library, warm_up=True,
+                     host=args.host, allowed_hosts=args.allow_host or ())
     host = args.host
     url = f"http://{'[' + host + ']' if ':' in host else host}:{args.port}/"
     if host not in LOOPBACK:
@@ -44,7 +47,7 @@ def cmd_studio(args: argparse.Namespace) -> int:
 
         threading.Timer(1.0, webbrowser.open, args=(url,)).start()
     uvicorn.run(app, host=host, port=args.port, log_level="warning" if args.quiet else "info",
-                ws_max_size=MAX_BODY)
+                ws_max_size=app.state.max_body)
     return 0
 
 
@@ -56,10 +59,15 @@ def register(sub) -> None:
                    help="address to bind (default 127.0.0.1: this computer only)")
     q.add_argument("--projects", metavar="DIR",
                    help="folder of project files (default: ~/.local/share/mimika/projects)")
-    q.add_argument("--head", default="builtin",
-                   help="builtin, ict or a glTF/GLB/VRM character file (default: builtin)")
+    q.add_argument("--head", default=DEFAULT_HEAD, metavar="NAME",
+                   help="the head the page opens with: a name from 'mimika heads' (default "
+                        f"{DEFAULT_HEAD}); the page switches heads without a restart")
     q.add_argument("--library", metavar="FILE",
                    help="user expression library (default: ~/.local/share/mimika/expressions.json)")
     q.add_argument("--no-browser", action="store_true", help="do not open a browser window")
+    q.add_argument("--allow-host", action="append", metavar="NAME",
+                   help="also answer requests for this Host name (repeatable; *.example.org "
+                        "matches subdomains); others get 403 — a guard against DNS rebinding")
     q.add_argument("-q", "--quiet", action="store_true")
+    limit_options(q, "max_duration", "max_frames", "max_export_seconds", "max_body")
     q.set_defaults(func=cmd_studio)

@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import add_head_arg, size_arg
+from mimika.commands._util import add_head_arg, limit_options, size_arg
 from mimika.errors import ParameterError
 
 CSV_FORMATS = ("au", "openface", "arkit")
@@ -16,7 +16,9 @@ INPUT_FORMATS = (*CSV_FORMATS, "pyfeat")
 READER_FLAGS = {"fill": ("fill", "--fill"), "source": ("source", "--from"),
                 "fps": ("take_fps", "--take-fps"), "scale": ("scale", "--scale"),
                 "timecodes": ("timecodes", "--timecodes"), "max_gap": ("max_gap", "--max-gap")}
-OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml")
+OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml", ".mp4")
+#: most tiles in a .png contact strip
+MAX_SHEET = 400
 
 
 def _say(args, msg: str) -> None:
@@ -117,11 +119,37 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
     _say(args, f"wrote {out} ({len(idx)} frames)")
 
 
+def _render_video(args: argparse.Namespace, tl) -> int:
+    """A spoken video of a script: its speech through espeak-ng's SSML mode, lip-sync, the
+    script's events on the words they wrap, blinks and skin shading."""
+    from dataclasses import replace
+
+    from mimika.commands._util import progress_bar
+    from mimika.newsreader import parse_article, render_news
+
+    if Path(args.script).suffix.lower() == ".json":
+        raise ParameterError("an .mp4 needs a script with speech (.xml/.ssml/.txt), not a "
+                             "project")
+    text = Path(args.script).read_text("utf-8")
+    art = replace(parse_article(text, source=args.script), script=tl)
+    res = render_news(art, out=args.output, lang=args.lang, head=args.head,
+                      fps=float(args.fps or 25.0), layers=("blink", "skin"),
+                      voice=args.voice, audio=args.audio, mood=args.mood,
+                      progress=progress_bar(args.quiet, "rendering"))
+    _say(args, f"wrote {res.video} ({res.n_frames} frames, {res.duration:.2f} s of speech)")
+    return 0
+
+
 def cmd_render(args: argparse.Namespace) -> int:
     from mimika.timeline import sample
 
     tl, settings = _load_timeline(args.script, rate=args.rate)
+    if tl.end <= 0:
+        raise ParameterError(f"{args.script}: nothing to render: the script has no text, no "
+                             "element and no duration")
     tl = _sync(args, tl)
+    if Path(args.output).suffix.lower() == ".mp4":
+        return _render_video(args, tl)
     fps = float(args.fps or settings.get("fps", 25.0))
     track = sample(tl, fps=fps, blend=args.blend or bool(settings.get("blend")))
     track = type(track)(track.values, track.channels, track.fps,
@@ -145,9 +173,11 @@ def _reader_options(args, fmt: str) -> dict:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     from mimika.io.tracks import detect_format, read_track
+    from mimika.limits import check_frames
 
     fmt = args.input_format or detect_format(args.take)
     track = read_track(args.take, format=fmt, **_reader_options(args, fmt))
+    check_frames(track.n_frames, f"take {args.take}")
     if args.fps:
         track = track.resample(fps=args.fps)
     meta = track.meta
@@ -215,7 +245,7 @@ def cmd_project(args: argparse.Namespace) -> int:
 def _common(p, *, head: bool = True) -> None:
     p.add_argument("-o", "--output", required=True,
                    help="output: .glb/.gltf (animated head), .csv (--format), .png (frames), "
-                        ".json (project), .xml (script)")
+                        ".json (project), .xml (script), .mp4 (spoken video; render only)")
     p.add_argument("--format", choices=CSV_FORMATS,
                    help="CSV layout: au (time,AU01,…; default), openface, arkit (Live Link Face)")
     p.add_argument("--fps", type=float, help="frames per second (default: project or 25)")
@@ -224,9 +254,24 @@ def _common(p, *, head: bool = True) -> None:
     p.add_argument("--view", default="front", choices=("front", "three-quarter", "profile"),
                    help="camera for .png")
     p.add_argument("--size", type=size_arg, default=(320, 240), help="tile size for .png")
-    p.add_argument("--frames", type=int, default=8, help="frames in a .png contact strip")
-    p.add_argument("--columns", type=int, default=8, help="tiles per row in a .png")
+    p.add_argument("--frames", type=_count(MAX_SHEET), default=8,
+                   help=f"frames in a .png contact strip (1–{MAX_SHEET})")
+    p.add_argument("--columns", type=_count(MAX_SHEET), default=8, help="tiles per row in a .png")
     p.add_argument("-q", "--quiet", action="store_true")
+    limit_options(p, "max_duration", "max_frames", "max_text")
+
+
+def _count(top: int):
+    def parse(text: str) -> int:
+        try:
+            n = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if not 1 <= n <= top:
+            raise argparse.ArgumentTypeError(f"{n} must be within 1…{top}")
+        return n
+
+    return parse
 
 
 def register(sub) -> None:
@@ -238,6 +283,10 @@ def register(sub) -> None:
                    help="knowledge-base timing rules: warn (default), clamp, error or off")
     r.add_argument("--rate", type=float, help="seconds per vowel unit for text timing (0.16)")
     r.add_argument("-v", "--verbose", action="store_true", help="also show suggestions")
+    r.add_argument("--lang", default="en", help="espeak language of the speech (.mp4; en)")
+    r.add_argument("--voice", help="espeak voice variant (.mp4)")
+    r.add_argument("--audio", metavar="FILE", help="a recording of the script's text (.mp4)")
+    r.add_argument("--mood", help="mood of the behaviour (.mp4; default the script's)")
     r.set_defaults(func=cmd_render)
 
     p = sub.add_parser("replay", help="replay a recorded take (Live Link Face / OpenFace / "
@@ -271,6 +320,7 @@ def register(sub) -> None:
     q.add_argument("--fps", type=float)
     q.add_argument("--blend", action="store_true")
     q.add_argument("-q", "--quiet", action="store_true")
+    limit_options(q, "max_duration", "max_frames", "max_text")
     q.set_defaults(func=cmd_plot)
 
     j = sub.add_parser("project", help="create, check or print project files")
@@ -280,4 +330,5 @@ def register(sub) -> None:
     j.add_argument("-o", "--output", help="file to write (new, script)")
     j.add_argument("--head", help="head setting (new)")
     j.add_argument("--fps", type=float, help="fps setting (new)")
+    limit_options(j, "max_duration", "max_text")
     j.set_defaults(func=cmd_project)

@@ -9,7 +9,48 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["atomic_open", "atomic_write"]
+__all__ = ["atomic_open", "atomic_write", "make_temp", "pid_alive", "sweep_stale"]
+
+
+def make_temp(path: str | os.PathLike, suffix: str = ".tmp") -> tuple[int, Path]:
+    """A new temporary file ``.NAME.PID.XXXX{suffix}`` beside ``path`` (its folder is
+    created): ``(fd, temp path)``. The PID lets :func:`sweep_stale` tell the temp files of
+    killed processes from those still being written."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.{os.getpid()}.", suffix=suffix, dir=p.parent)
+    return fd, Path(tmp)
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (or cannot be signalled: another user's)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True
+    return True
+
+
+def sweep_stale(path: str | os.PathLike) -> int:
+    """Remove the temporary files :func:`make_temp` made beside ``path`` for processes that
+    no longer run (a render or save that was killed); returns how many were removed."""
+    p = Path(path)
+    head = f".{p.name}."
+    removed = 0
+    try:
+        entries = [e for e in os.scandir(p.parent if str(p.parent) else ".")
+                   if e.name.startswith(head)]
+    except OSError:
+        return 0
+    for e in entries:
+        pid, _, rest = e.name[len(head):].partition(".")
+        if pid.isdigit() and rest and not pid_alive(int(pid)):
+            with contextlib.suppress(OSError):
+                os.unlink(e.path)
+                removed += 1
+    return removed
 
 
 @contextlib.contextmanager
@@ -18,8 +59,7 @@ def atomic_open(path: str | os.PathLike) -> Iterator[BinaryIO]:
     renamed over ``path``. On any failure the previous file is untouched and the temp file is
     removed. Parent folders are created."""
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    fd, tmp = make_temp(p)
     try:
         umask = os.umask(0)
         os.umask(umask)

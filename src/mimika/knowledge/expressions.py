@@ -18,6 +18,7 @@ from __future__ import annotations
 import difflib
 import json
 import logging
+import math
 import os
 import re
 from collections.abc import Mapping
@@ -29,7 +30,8 @@ from typing import Any
 
 from mimika.errors import DataError, ParameterError
 from mimika.facs.catalogue import parse_au_values
-from mimika.io.atomic import atomic_write
+from mimika.io.atomic import atomic_write, sweep_stale
+from mimika.limits import loads_json
 
 log = logging.getLogger(__name__)
 
@@ -85,15 +87,31 @@ def _valid_intensity(intensity: float) -> float:
 
 
 def _from_dict(d: Mapping[str, Any], *, where: str, builtin: bool) -> Expression:
+    if not isinstance(d, Mapping):
+        raise DataError(f"{where}: must be an object with name, aus, onset, duration, offset")
+    name = d.get("name")
+    if not isinstance(name, str) or not name:
+        raise DataError(f"{where}.name: must be a name like 'my-smile', not {name!r:.40}")
+    aus = d.get("aus", {})
+    if not isinstance(aus, Mapping | list):
+        raise DataError(f"{where}.aus: must be an object like {{\"AU12\": 0.8}}")
     try:
-        name = str(d["name"])
-        aus = parse_au_values(d.get("aus", {}))
-        onset, duration, offset = (float(d.get(k, dv)) for k, dv in
-                                   (("onset", 0.25), ("duration", 1.0), ("offset", 0.25)))
-    except (KeyError, TypeError, ValueError) as e:
-        raise DataError(f"{where}: malformed expression entry {dict(d)!r}: {e}") from None
+        parsed = parse_au_values(aus)
+    except (TypeError, ValueError) as e:  # ParameterError is a ValueError
+        raise DataError(f"{where}.aus: {e}") from None
+    times = []
+    for k, default in (("onset", 0.25), ("duration", 1.0), ("offset", 0.25)):
+        v = d.get(k, default)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
+                or abs(v) > 3600:
+            raise DataError(f"{where}.{k}: must be a number of seconds (0…3600), not {v!r:.40}")
+        times.append(float(v))
+    onset, duration, offset = times
+    for k in ("description", "source"):
+        if not isinstance(d.get(k, ""), str):
+            raise DataError(f"{where}.{k}: must be text")
     _check_timing(onset, duration, offset, what=f"{where}: {name}")
-    return Expression(name, aus, onset, duration, offset, str(d.get("description", "")),
+    return Expression(name, parsed, onset, duration, offset, str(d.get("description", "")),
                       str(d.get("source", "user")), builtin)
 
 
@@ -150,19 +168,26 @@ class ExpressionLibrary:
         self._user = self._load()
 
     def _load(self) -> dict[str, Expression]:
+        sweep_stale(self.path)  # temp files of saves that were killed
         if not self.path.exists():
             return {}
-        try:
-            data = json.loads(self.path.read_text("utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-            raise DataError(f"cannot read expression library {str(self.path)!r}: {e}; fix or "
-                            "remove the file") from None
-        if not isinstance(data, dict) or not isinstance(data.get("expressions"), list):
-            raise DataError(f"expression library {str(self.path)!r} must be a JSON object with "
-                            "an 'expressions' list")
         where = str(self.path)
-        return {e["name"]: _from_dict(e, where=where, builtin=False)
-                for e in data["expressions"] if isinstance(e, dict) and "name" in e}
+        try:
+            data = loads_json(self.path.read_bytes(), where)
+        except (OSError, DataError) as e:
+            raise DataError(f"cannot read expression library: {e}; fix or remove the "
+                            "file") from None
+        if not isinstance(data, dict) or not isinstance(data.get("expressions"), list):
+            raise DataError(f"expression library {where!r} must be a JSON object with "
+                            "an 'expressions' list")
+        out: dict[str, Expression] = {}
+        for i, e in enumerate(data["expressions"]):
+            expr = _from_dict(e, where=f"{where}: expressions[{i}]", builtin=False)
+            if not _NAME_RE.match(expr.name):
+                raise DataError(f"{where}: expressions[{i}].name: {expr.name!r:.40} must be "
+                                "lower-case letters, digits, '-' or '_'; fix or remove the entry")
+            out[expr.name] = expr
+        return out
 
     # -- queries ----------------------------------------------------------------------------
     def names(self) -> list[str]:

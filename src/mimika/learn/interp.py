@@ -87,11 +87,13 @@ def transition(start: Mapping[str, float], target: Mapping[str, float], *, durat
     Returns an :class:`~mimika.tracks.AUTrack` of ``round(duration·fps) + 1`` frames (start
     and target included) over the union of the model's channels with those of the inputs.
     """
+    from mimika.limits import check_timeline
     from mimika.tracks import AUTrack, valid_fps
 
     fps = valid_fps(fps)
     if not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration={duration!r} s must be > 0")
+    check_timeline(duration, fps, "the transition")  # mimika.limits, before allocating
     n = max(1, round(duration * fps))
     codes = list(dict.fromkeys([*MODEL_CHANNELS, *start, *target]))
     a = np.array([float(start.get(c, 0.0)) for c in codes])

@@ -17,7 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from mimika.errors import DataError, MimikaError
-from mimika.io.atomic import atomic_write
+from mimika.io.atomic import atomic_write, sweep_stale
+from mimika.limits import check_json_tree, loads_json
 from mimika.timeline.model import (
     KINDS,
     Channel,
@@ -318,7 +319,14 @@ def _settings(c: _Check, d: Any) -> dict[str, Any]:
 
 
 def project_from_dict(data: Any, *, source: str = "<project>") -> Project:
-    """Validate ``data`` (parsed JSON) and build a :class:`Project`; migrates old versions."""
+    """Validate ``data`` (parsed JSON) and build a :class:`Project`; migrates old versions.
+
+    Everything wrong is one :class:`ProjectError` listing ``path: problem`` — including what
+    :mod:`mimika.limits` refuses (deep nesting, huge integers, NaN/Infinity, events past
+    ``max_duration``)."""
+    problems = check_json_tree(data)
+    if problems:
+        raise ProjectError(source, problems)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ProjectError(source, [f'format: not a mimika project (expected "format": '
                                     f'"{FORMAT}")'])
@@ -354,10 +362,7 @@ def load_project(path: str | Path) -> Project:
         raise DataError(f"project file {p} does not exist") from None
     except (OSError, UnicodeDecodeError) as e:
         raise DataError(f"cannot read project {p}: {e}") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise DataError(f"{p}:{e.lineno}:{e.colno}: invalid JSON: {e.msg}") from None
+    data = loads_json(text, str(p), check=False)  # project_from_dict lists what it refuses
     return project_from_dict(data, source=str(p))
 
 
@@ -365,4 +370,5 @@ def save_project(project: Project, path: str | Path) -> Path:
     """Write ``project`` as JSON to ``path`` atomically; returns the path."""
     text = json.dumps(project_to_dict(project), indent=1, ensure_ascii=False,
                       allow_nan=False) + "\n"
+    sweep_stale(path)  # temp files of saves that were killed
     return atomic_write(path, text)

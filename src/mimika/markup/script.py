@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
+from mimika import limits
 from mimika.errors import DataError, MimikaError, ParameterError
 from mimika.facs.catalogue import parse_au_values, parse_intensity
 from mimika.markup.elements import (
@@ -263,6 +264,9 @@ class _Parser:
             parent = st.stack[-1]
             if parent.kind == "mimika" and parent.local in ("channel", "settings", "mood"):
                 raise self.error(f"<{parent.qname}> must be empty")
+        if len(st.stack) > limits.current().max_depth:
+            raise self.error(str(limits.over("max_depth", "the elements are nested "
+                                                          f"{len(st.stack)} levels deep")))
         kind, local = self._resolve(qname, ns)
         if not st.stack:  # the root
             if kind != "ssml" or local != "speak":  # pragma: no cover - wrapped above
@@ -295,6 +299,7 @@ class _Parser:
                 v = break_seconds(a)
                 if v < 0:
                     raise ParameterError(f"break time={a['time']!r} must be ≥ 0")
+                limits.check_duration(v, f"break time={a.get('time', '')!r}")
             elif local == "prosody" and "rate" in a:
                 rate_factor(a["rate"])
         except ParameterError as e:
@@ -389,9 +394,11 @@ class _Parser:
             pend.p0, p1 = adj(pend.p0), adj(p1)
             try:
                 ch, ev = self._event(pend, p1, timing.times, mood)
-            except ParameterError as e:
-                raise ScriptError(getattr(e, "detail", str(e)), source=self.source,
-                                  line=pend.line, col=pend.col) from None
+            except ParameterError as e:  # an Event's message starts with its place already
+                msg = getattr(e, "detail", str(e))
+                msg = msg.removeprefix(f"{self.source}:{pend.line}:{pend.col}: ")
+                raise ScriptError(msg, source=self.source, line=pend.line,
+                                  col=pend.col) from None
             by_channel.setdefault(ch, []).append(ev)
         speech, by_channel = _merge_texts(speech, by_channel)
         try:
@@ -534,6 +541,7 @@ def parse_script(text: str, *, source: str = "<script>", library: Any = None,
 
         library = default_library()
     try:
+        limits.check_text(text, "the script")
         return _Parser(text, source=source, library=library, word_times=word_times,
                        rate=rate).run()
     except ScriptError:

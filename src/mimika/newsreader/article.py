@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import ParameterError
 
 log = logging.getLogger(__name__)
@@ -29,6 +30,7 @@ class Article:
     paragraphs: tuple[str, ...]
     script: Any = None
     source: str = "<article>"
+    base: Any = None  #: folder that relative ``<audio src>`` paths start from
 
     @property
     def text(self) -> str:
@@ -44,6 +46,7 @@ def parse_article(text: str, *, source: str = "<article>") -> Article:
     """An :class:`Article` from plain text or script text; empty input raises ParameterError."""
     if not isinstance(text, str) or not text.strip():
         raise ParameterError(f"article {source} is empty; give at least one sentence to read")
+    limits.check_text(text, f"article {source}")
     if is_script(text):
         from mimika.markup import parse_script
 
@@ -53,7 +56,10 @@ def parse_article(text: str, *, source: str = "<article>") -> Article:
             raise ParameterError(f"script {source} has no text to speak inside <speak>")
         paras = tuple(p for p in (" ".join(x.split()) for x in re.split(r"\n\s*\n", spoken))
                       if p)
-        return Article(paras, tl, source)
+        from pathlib import Path
+
+        base = Path(source).parent if source and not source.startswith("<") else None
+        return Article(paras, tl, source, base)
     paras = tuple(" ".join(p.split()) for p in re.split(r"\n\s*\n", text.strip()))
     return Article(tuple(p for p in paras if p), None, source)
 
@@ -68,6 +74,81 @@ def _shift(utt: Any, dt: float, char0: int) -> tuple[list, list, list]:
     return ph, ws, ss
 
 
+def _pad(utt: Any, lead: float, tail: float) -> Any:
+    """``utt`` with ``lead`` s of silence before and ``tail`` s after (times shifted)."""
+    from mimika.speech import Phone, Utterance
+
+    sr = utt.sr
+    n0, n1 = round(lead * sr), round(tail * sr)
+    d = n0 / sr
+    audio = np.concatenate([np.zeros(n0, np.float32), utt.audio.astype(np.float32),
+                            np.zeros(n1, np.float32)])
+    ph, ws, ss = _shift(utt, d, 0)
+    ph = [Phone("_", 0.0, d), *ph, Phone("_", ph[-1].end if ph else d, len(audio) / sr)]
+    merged: list = []
+    for p in ph:
+        if p.end <= p.start:
+            continue
+        if merged and p.is_pause and merged[-1].is_pause:
+            merged[-1] = Phone("_", merged[-1].start, p.end)
+        else:
+            merged.append(p)
+    meta = dict(utt.meta)
+    if "script_positions" in meta:
+        meta["script_positions"] = [t + d for t in meta["script_positions"]]
+    return Utterance(audio, sr, merged, ws, ss, lang=utt.lang, text=utt.text, meta=meta)
+
+
+def _speak_script(article: Article, *, lang: str, voice: str | None, rate: int, pitch: int
+                  ) -> tuple[Any, list[float]]:
+    """A ``<speak>`` script through espeak-ng's SSML mode, with the script's positions timed."""
+    from mimika.speech.ssml import items_from_speech, speak
+
+    utt, positions = speak(items_from_speech(article.script.speech), lang=lang, voice=voice,
+                           rate=rate, pitch=pitch, base=article.base)
+    utt.meta["script_positions"] = positions
+    utt = _pad(utt, LEAD_IN, TAIL)
+    return utt, [utt.words[0].start if utt.words else LEAD_IN]
+
+
+def align_article(article: Article, audio: np.ndarray, *, sr: int, lang: str = "en"
+                  ) -> tuple[Any, list[float]]:
+    """Time ``article`` on a recording of it (any voice): ``(utterance, paragraph_starts)``;
+    the utterance's audio is the recording, untouched."""
+    from mimika.speech.alignment import align
+
+    if article.script is not None:
+        from mimika.speech.ssml import items_from_speech
+
+        items = items_from_speech(article.script.speech)
+        text, item_of, alias = "", [], None
+        for k, it in enumerate(items):
+            if it[0] == "open" and it[1] == "sub":  # the recording says the alias
+                alias = f" {it[2].get('alias', '')} "
+            elif it[0] == "close" and it[1] == "sub":
+                alias = None
+            elif it[0] == "text":
+                said = it[1] if alias is None else alias
+                alias = "" if alias is not None else None
+                text += said
+                item_of += [k] * len(said)
+        utt = align(audio, sr=sr, transcript=text, lang=lang)
+        from mimika.speech.ssml import _positions
+
+        utt.meta["script_positions"] = _positions(
+            len(items), utt.words, [item_of[w.offset] for w in utt.words], utt.duration)
+        return utt, [utt.words[0].start if utt.words else 0.0]
+    text = article.text
+    utt = align(audio, sr=sr, transcript=text, lang=lang)
+    starts, pos = [], 0
+    for para in article.paragraphs:
+        ws = [w for w in utt.words if pos <= w.offset < pos + len(para)]
+        if ws:
+            starts.append(ws[0].start)
+        pos += len(para) + 2
+    return utt, starts
+
+
 def speak_article(article: Article, *, lang: str = "en", voice: str | None = None,
                   rate: int = 165, pitch: int = 50, sentence_gap: float = SENTENCE_GAP,
                   paragraph_gap: float = PARAGRAPH_GAP) -> tuple[Any, list[float]]:
@@ -75,10 +156,15 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
 
     Returns ``(utterance, paragraph_starts)``: one :class:`~mimika.speech.Utterance` (audio
     float32 mono at ``sr``, phones tiling it, words and sentences in seconds) and the start
-    times (s) of the first sentence of every paragraph.
+    times (s) of the first sentence of every paragraph. A ``<speak>`` script goes to espeak-ng
+    as SSML in one piece (breaks, prosody, sub … change the speech), and
+    ``utterance.meta["script_positions"]`` holds the time of every script position.
     """
     from mimika.speech import Phone, Sentence, Utterance, synthesize
     from mimika.speech.tts import split_sentences
+
+    if article.script is not None:
+        return _speak_script(article, lang=lang, voice=voice, rate=rate, pitch=pitch)
 
     chunks: list[np.ndarray] = []
     phones: list = []
@@ -89,6 +175,7 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
     t = 0.0
     char_base = 0
     full = article.text
+    limits.check_speech(full, rate, f"article {article.source}")
 
     def silence(d: float) -> None:
         nonlocal t
@@ -125,6 +212,7 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
             chunks.append(u.audio.astype(np.float32))
             t0, t = t, t + len(u.audio) / u.sr
             sents.append(Sentence(sent, t0, t))  # the sentence spans its synthesised chunk
+            limits.check_duration(t, f"the speech of article {article.source}")
         char_base += len(para) + 2
     silence(TAIL)
     audio = np.concatenate(chunks).astype(np.float32)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import tempfile
@@ -13,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import DataError, ParameterError
 from mimika.newsreader.article import Article, parse_article, speak_article
 from mimika.tracks import AUTrack, valid_fps
@@ -90,12 +92,11 @@ def _retime_script(article: Article, utt: Any, *, fps: float, n_frames: int) -> 
     tl = article.script
     if tl is None or not tl.channels:
         return None
-    text_words = time_speech(tl.speech, rate=tl.rate).words
-    tw = np.array([w.start for w in text_words] + [text_words[-1].end]) if text_words else None
-    aw = np.array([w.start for w in utt.words] + [utt.words[-1].end]) if utt.words else None
-    if tw is not None and aw is not None and len(tw) == len(aw):
-        src, dst = tw, aw
-    else:  # word counts differ (numbers, abbreviations): stretch text time linearly
+    timing = time_speech(tl.speech, rate=tl.rate)
+    positions = utt.meta.get("script_positions")
+    if positions is not None and len(positions) == len(timing.times):
+        src, dst = np.array(timing.times), np.array(positions, float)
+    else:  # no positions (an utterance made elsewhere): stretch text time linearly
         end = tl.speech_end() or tl.end
         src = np.array([0.0, max(end, 1e-3)])
         dst = np.array([utt.words[0].start if utt.words else 0.0,
@@ -127,15 +128,18 @@ def news_track(article: Article | str, *, lang: str = "en", fps: float = 25.0,
                layers: Iterable[str] | None = None, voice: str | None = None,
                rate: int = 165, pitch: int = 50, seed: int | None = None,
                params: dict[str, Any] | None = None, supported: Iterable[str] | None = None,
-               utterance: Any = None, paragraph_starts: list[float] | None = None
-               ) -> NewsTrack:
+               utterance: Any = None, paragraph_starts: list[float] | None = None,
+               mood: str | None = None) -> NewsTrack:
     """Speech, behaviour layers and the final blended AU track of an article.
 
-    ``utterance`` (with ``paragraph_starts``) reuses an earlier synthesis. ``supported``
-    restricts the final channels to what a rig models. The final track has
-    ``ceil(duration · fps)`` frames, frame i at i / fps s.
+    ``utterance`` (with ``paragraph_starts``) reuses an earlier synthesis or an alignment of
+    a recording. ``supported`` restricts the final channels to what a rig models. ``mood``
+    (default: the script's, else neutral) changes how often and how strongly the layers act.
+    The final track has ``ceil(duration · fps)`` frames, frame i at i / fps s.
     """
-    from mimika.behaviour import behaviour_layers, cues_from_utterance, merge_layers
+    from mimika.behaviour import merge_layers
+    from mimika.behaviour.mood import mood_params
+    from mimika.behaviour.speaking import speaking_behaviour
     from mimika.facs.blender import blend_track
     from mimika.speech import combine, mouth_track
 
@@ -146,11 +150,14 @@ def news_track(article: Article | str, *, lang: str = "en", fps: float = 25.0,
         utterance, paragraph_starts = speak_article(art, lang=lang, voice=voice, rate=rate,
                                                     pitch=pitch)
     paras = list(paragraph_starts or [])
-    cues = cues_from_utterance(utterance, paragraph_starts=paras)
+    if mood is None and art.script is not None:
+        mood = art.script.mood
     mouth = mouth_track(utterance, fps=fps)
     n = mouth.n_frames
-    beh = behaviour_layers(cues, fps=fps, seed=seed, params=params,
-                           layers=[x for x in enabled if x not in _DRAWING])
+    params = mood_params(mood, params)
+    _, beh = speaking_behaviour(utterance, fps=fps, seed=seed, params=params,
+                                layers=[x for x in FEATURES if x in enabled and x not in _DRAWING],
+                                paragraph_starts=paras, n_frames=n)
     parts = dict(beh)
     script = _retime_script(art, utterance, fps=fps, n_frames=n)
     if script is not None and script.channels:
@@ -165,7 +172,7 @@ def news_track(article: Article | str, *, lang: str = "en", fps: float = 25.0,
         track = track.with_channels([c for c in track.channels if c in sup])
     track = AUTrack(track.values[:n], track.channels, fps,
                     {"source": "mimika.newsreader", "lang": utterance.lang,
-                     "layers": sorted(enabled)})
+                     "layers": sorted(enabled), "mood": mood or "neutral"})
     return NewsTrack(track, utterance, beh, paras, mouth)
 
 
@@ -243,7 +250,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
                 seed: int | None = None, subtitles: bool = True,
                 aus: str | os.PathLike | None = None, crf: int = 23,
                 preset: str = "veryfast", rig: Any = None, news: NewsTrack | None = None,
-                workers: int | None = None) -> NewsResult:
+                workers: int | None = None, audio: str | os.PathLike | None = None,
+                mood: str | None = None) -> NewsResult:
     """Read ``text`` (plain article or ``<speak>`` script) as a newsreader into an MP4.
 
     Writes ``out`` (H.264 yuv420p + AAC, ``fps`` frames/s, frame i showing time i / fps, video
@@ -253,6 +261,9 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     ``rig``/``news`` reuse a loaded head / a computed :class:`NewsTrack` (ablations).
     ``workers``: rendering processes (None: one per core for videos over 6 s; 1: none). With
     more than one, call this from a script under ``if __name__ == "__main__":``.
+    ``audio``: a recording of the text (WAV, MP3 … any voice) — the text is aligned to it and
+    the video carries it unchanged, so the video lasts exactly as long as the recording.
+    ``mood``: see :func:`news_track`.
     """
     from mimika.render.video import VideoWriter
 
@@ -263,6 +274,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         raise ParameterError(f"size={w}x{h}: width and height must be even for H.264 video")
     enabled = check_layers(layers)
     fps = valid_fps(fps)
+    if news is None:  # refuse an article too long to say before loading anything
+        limits.check_speech(text if isinstance(text, str) else text.text, rate, "the article")
     tm: dict[str, float] = {}
     t_all = time.perf_counter()
     if rig is None:
@@ -275,29 +288,41 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     if news is None:
         art = parse_article(text, source="<article>") if isinstance(text, str) else text
         t1 = time.perf_counter()
-        utt, paras = speak_article(art, lang=lang, voice=voice, rate=rate)
-        tm["tts"] = time.perf_counter() - t1
+        if audio is not None:
+            from mimika.newsreader.article import align_article
+            from mimika.speech.audio import read_media
+
+            rec, sr = read_media(audio)
+            utt, paras = align_article(art, rec, sr=sr, lang=lang)
+            tm["align"] = time.perf_counter() - t1
+        else:
+            utt, paras = speak_article(art, lang=lang, voice=voice, rate=rate)
+            tm["tts"] = time.perf_counter() - t1
         t1 = time.perf_counter()
         news = news_track(art, lang=lang, fps=fps, layers=enabled, seed=seed,
-                          supported=rig.supported, utterance=utt, paragraph_starts=paras)
+                          supported=rig.supported, utterance=utt, paragraph_starts=paras,
+                          mood=mood)
         tm["tracks"] = time.perf_counter() - t1
     else:
         news = news_track(text if isinstance(text, Article) else parse_article(text),
                           lang=lang, fps=fps, layers=enabled, seed=seed,
                           supported=rig.supported, utterance=news.utterance,
-                          paragraph_starts=news.paragraph_starts)
+                          paragraph_starts=news.paragraph_starts, mood=mood)
         tm["tracks"] = time.perf_counter() - t0
     track, utt = news.track, news.utterance
     n = track.n_frames
-    # pad the audio to the video's length so both streams end together
-    audio = np.zeros(round(n / fps * utt.sr), np.float32)
-    audio[: min(len(audio), len(utt.audio))] = utt.audio[: len(audio)]
-    with VideoWriter(out, fps=fps, size=(w, h), audio=audio, sr=utt.sr, crf=crf,
-                     preset=preset) as vw:
-        for i, img in enumerate(render_frames(rig, track, size=(w, h), view=view,
-                                              samples=samples, skin_shader="skin" in enabled,
-                                              hair="hair" in enabled, workers=workers,
-                                              timings=tm)):
+    if utt.meta.get("source") == "alignment":  # a recording: exactly as it was
+        sound = utt.audio
+    else:  # pad the audio to the video's length so both streams end together
+        sound = np.zeros(round(n / fps * utt.sr), np.float32)
+        sound[: min(len(sound), len(utt.audio))] = utt.audio[: len(sound)]
+    frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
+                           skin_shader="skin" in enabled, hair="hair" in enabled,
+                           workers=workers, timings=tm)
+    # closing: an interrupted render stops its worker processes at once
+    with VideoWriter(out, fps=fps, size=(w, h), audio=sound, sr=utt.sr, crf=crf,
+                     preset=preset) as vw, contextlib.closing(frames):
+        for i, img in enumerate(frames):
             vw.write(img)
             if progress is not None:
                 progress(i + 1, n)

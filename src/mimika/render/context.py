@@ -55,7 +55,10 @@ def get_context() -> Any:
             raise RenderError(
                 f"headless OpenGL (Mesa EGL) is not available: {exc}; {INSTALL_HINT}"
             ) from exc
-        info = ctx.info
+        # entering and leaving once releases it from this thread (glcontext leaves a new
+        # context current where it was made, and then no other thread could use it)
+        with ctx:
+            info = ctx.info
         log.info(
             "OpenGL context: %s, %s (GL %s)",
             info.get("GL_VENDOR"),

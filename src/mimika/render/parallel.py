@@ -10,8 +10,11 @@ same whatever the number of workers.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+import threading
+import time
 from collections import deque
 from collections.abc import Iterator, Sequence
 from typing import Any
@@ -47,8 +50,18 @@ def _draw(renderer: Any, rig: Any, values: np.ndarray, channels: Sequence[str],
         yield renderer.render({n: p[i] for n, p in pos.items()}, camera=camera)
 
 
+def _watch_parent(ppid: int) -> None:
+    """Exit as soon as the parent is gone (killed, even by SIGKILL): no orphan workers."""
+    while os.getppid() == ppid:
+        time.sleep(0.25)
+    os._exit(1)
+
+
 def _init(rig: Any, channels: Sequence[str], size: tuple[int, int], samples: int, skin: Any,
-          lighting: Any, lp_threads: int, hidden: Sequence[str] = ()) -> None:
+          lighting: Any, lp_threads: int, hidden: Sequence[str] = (), ppid: int = 0) -> None:
+    if ppid:
+        threading.Thread(target=_watch_parent, args=(ppid,), name="mimika-watch-parent",
+                         daemon=True).start()
     os.environ.setdefault("LP_NUM_THREADS", str(lp_threads))
     _worker.update(rig=rig, channels=channels,
                    renderer=_open(rig, size, samples, skin, lighting, hidden))
@@ -57,6 +70,21 @@ def _init(rig: Any, channels: Sequence[str], size: tuple[int, int], samples: int
 def _render_chunk(values: np.ndarray, camera: Any) -> np.ndarray:
     w = _worker
     return np.stack(list(_draw(w["renderer"], w["rig"], values, w["channels"], camera)))
+
+
+def _stop(pool: Any) -> None:
+    """Cancel what is queued and end the worker processes without waiting for their chunks
+    (``ProcessPoolExecutor`` offers no terminate before Python 3.14)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.join(2.0)
+            if p.is_alive():
+                p.kill()
 
 
 def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camera: Any,
@@ -89,7 +117,7 @@ def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camer
     lp = 0 if lp <= 1 else lp
     with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_init,
                              initargs=(rig, list(channels), size, samples, skin, lighting,
-                                       lp, tuple(hidden))) as pool:
+                                       lp, tuple(hidden), os.getpid())) as pool:
         pending: deque = deque()
         try:
             for i0 in starts:
@@ -103,6 +131,6 @@ def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camer
                 f"the rendering processes stopped ({exc}); render with workers=1 (--workers 1) "
                 "to see the error here, and start them from a script only under "
                 "'if __name__ == \"__main__\":'") from None
-        finally:
-            for f in pending:
-                f.cancel()
+        except BaseException:  # interrupted, terminated or abandoned: stop the workers now
+            _stop(pool)
+            raise

@@ -435,6 +435,14 @@ class Renderer:
 
     def close(self) -> None:
         """Free this renderer's GPU objects (the shared GL context stays)."""
+        ctx = self._gl.get("ctx") if self._gl is not None else None
+        if ctx is None:
+            self._release()
+            return
+        with render_lock, ctx:  # current in this thread: another may be drawing
+            self._release()
+
+    def _release(self) -> None:
         if self._skin is not None:
             self._skin.release()
             self._skin = None

@@ -13,9 +13,9 @@ import contextlib
 import logging
 import os
 import queue
-import tempfile
 import threading
 import time
+from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from mimika.errors import DataError, ParameterError, RenderError
+from mimika.io.atomic import make_temp, sweep_stale
 
 log = logging.getLogger(__name__)
 
@@ -76,12 +77,12 @@ class VideoWriter:
         self.encode_seconds = 0.0
         parent = self.path.parent if str(self.path.parent) else Path(".")
         try:
-            parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".mp4", dir=parent)
+            sweep_stale(self.path)  # temp files of renders that were killed
+            fd, tmp = make_temp(parent / self.path.name, suffix=".mp4")
             os.close(fd)
         except OSError as e:
             raise DataError(f"cannot write {str(self.path)!r}: {e.strerror or e}") from None
-        self._tmp = Path(tmp)
+        self._tmp = tmp
         try:
             self._c = av.open(str(self._tmp), mode="w", format="mp4")
             vs = self._c.add_stream("libx264", rate=self.fps)
@@ -165,11 +166,21 @@ class VideoWriter:
             self._encode(a, self.n_frames)
         self.n_frames += 1
 
-    def _join(self) -> None:
-        if self._thread is not None and self._thread.is_alive():
-            assert self._q is not None
-            self._q.put(_STOP)
-            self._thread.join()
+    def _join(self, *, abort: bool = False) -> None:
+        """Let the encoder thread finish (``abort``: skip what is queued) and wait for it —
+        before the container is closed, which must not happen while it encodes."""
+        if self._thread is None:
+            return
+        assert self._q is not None
+        if abort and self._err is None:
+            self._err = RenderError("the video was abandoned")
+        sent = False
+        while self._thread.is_alive():  # polling: SIGTERM can arrive meanwhile
+            if not sent:
+                with contextlib.suppress(queue.Full):
+                    self._q.put(_STOP, timeout=0.1)
+                    sent = True
+            self._thread.join(0.1)
 
     def close(self) -> Path:
         """Flush the encoders, finish the file and move it to :attr:`path`; returns it."""
@@ -191,17 +202,17 @@ class VideoWriter:
             os.chmod(self._tmp, 0o666 & ~umask)  # like a plain open(); mkstemp makes it 0600
             os.replace(self._tmp, self.path)
         except OSError as e:
-            self._discard()
+            self.abort()
             raise DataError(f"cannot write {str(self.path)!r}: {e.strerror or e}") from None
-        except BaseException:
-            self._discard()
+        except BaseException:  # also SIGTERM / Ctrl-C while waiting for the encoder
+            self.abort()
             raise
         log.info("wrote %s: %d frames at %s fps", self.path, self.n_frames, self.fps)
         return self.path
 
     def abort(self) -> None:
         """Stop and delete the temporary file; the target is left untouched."""
-        self._join()
+        self._join(abort=True)
         self._discard()
 
     def _discard(self) -> None:
@@ -222,9 +233,12 @@ class VideoWriter:
 
 def write_track_video(rig: Any, track: Any, path: str | os.PathLike, *,
                       size: tuple[int, int] = (640, 480), view: str = "front", samples: int = 4,
-                      audio: np.ndarray | None = None, sr: int | None = None) -> Path:
+                      audio: np.ndarray | None = None, sr: int | None = None,
+                      progress: Callable[[int, int], None] | None = None) -> Path:
     """Render the AU ``track`` on ``rig``'s head into an H.264 (+ AAC with ``audio``) MP4 at
-    ``track.fps``, written atomically. Channels the rig does not model are left out."""
+    ``track.fps``, written atomically. Channels the rig does not model are left out.
+    ``progress(done, total)`` is called after every frame; an exception it raises stops the
+    render and leaves no file."""
     from mimika.render import Renderer
 
     w, h = (int(s) // 2 * 2 for s in size)
@@ -232,8 +246,10 @@ def write_track_video(rig: Any, track: Any, path: str | os.PathLike, *,
     track = track.with_channels(keep)
     with Renderer(rig.head, size=(w, h), samples=samples) as r, \
             VideoWriter(path, fps=track.fps, size=(w, h), audio=audio, sr=sr) as out:
-        for pos in rig.deform_track(track):
+        for i, pos in enumerate(rig.deform_track(track)):
             out.write(r.render(pos, view=view))
+            if progress is not None:
+                progress(i + 1, track.n_frames)
     return Path(path)
 
 

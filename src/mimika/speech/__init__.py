@@ -1,7 +1,9 @@
 """Speech and lip-sync in AU space.
 
-text → sentences → espeak-ng audio + timed phonemes (:func:`synthesize`), or a recording +
-transcript → timed phonemes (:func:`align`) → phoneme classes → Cohen–Massaro coarticulation
+text or SSML → sentences → espeak-ng audio + timed phonemes and written words
+(:func:`synthesize`), or a recording + transcript → timed phonemes (:func:`align`:
+pocketsphinx for English, DTW against espeak-ng for every language), or a recording alone →
+recognised phones (:func:`recognise`) → phoneme classes → Cohen–Massaro coarticulation
 in AU space with hard /p b m/ and /f v/ closure rules (:func:`mouth_track`) → mixing with
 emotion tracks (:func:`combine`) and viseme exports (Oculus-15, Rhubarb, MPEG-4, seed 004).
 
@@ -18,6 +20,8 @@ _LAZY = {
     "synthesize": "mimika.speech.tts",
     "split_sentences": "mimika.speech.tts",
     "align": "mimika.speech.alignment",
+    "recognise": "mimika.speech.alignment",
+    "read_media": "mimika.speech.audio",
     "mouth_track": "mimika.speech.coarticulation",
     "mouth_aus": "mimika.speech.coarticulation",
     "bilabial_apex_times": "mimika.speech.coarticulation",

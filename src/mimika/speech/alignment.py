@@ -1,8 +1,16 @@
 """Recorded speech + transcript → phoneme timing (TTS-independent viseme input).
 
-Method: synthesise the transcript with espeak-ng (which gives exact phone boundaries for its
-own rendition), then warp that rendition onto the recording with dynamic time warping on
-MFCC features, and carry the boundaries across the warping path.
+Two engines (:func:`align`, ``engine=``): English goes through pocketsphinx's forced
+alignment (:mod:`mimika.speech.sphinx`); every other espeak-ng language (and English without
+pocketsphinx) through DTW against an espeak-ng rendition, below. Both then move word edges
+next to pauses onto the recording's energy (:mod:`mimika.speech.vad`), and time the words as
+written (:mod:`mimika.speech.words`). Real-speech figures: ``bench/bench_align_real.py``.
+
+DTW method: the recording is cut to its speech (sustained energy, ± 0.1 s), so silence, clicks
+and breaths around it cannot drag the edge words; the transcript is synthesised with espeak-ng
+(which gives exact phone boundaries for its own rendition, also cut to its speech), warped
+onto the recording with dynamic time warping on MFCC features, and the boundaries are carried
+across the warping path.
 
 * Features: numpy/scipy MFCCs (16 kHz, 25 ms Hamming window, 5 ms hop, 40 mel bands
   60–7600 Hz, c1–c12 + Δc0–Δc12), mean/variance normalised per utterance so that voice,
@@ -11,9 +19,7 @@ MFCC features, and carry the boundaries across the warping path.
 * Noise matching: the recording's noise floor (per mel band, 10th percentile over frames) is
   added to the level-matched reference's mel power before the log, so that silence and weak
   consonants look alike in both under additive noise.
-* Optional rate matching (``match_rate=True``): re-synthesise the reference at the speaking
-  rate that makes its voiced length equal the recording's. Off by default (see ``align``).
-* DTW: symmetric step pattern (diagonal weight 2, horizontal/vertical 1), first on 20 ms
+* DTW: symmetric step pattern (diagonal weight 2, horizontal/vertical 1.5), first on 20 ms
   frames inside a Sakoe–Chiba band of ±(25 % + 1 s), then on 5 ms frames inside ±50 ms of the
   coarse path. Each row is vectorised (the horizontal recursion is a running minimum), so
   cost is O(N·W) in numpy.
@@ -40,6 +46,11 @@ HOP = 0.005  #: feature hop in seconds
 WIN = 0.025
 COARSE = 4  #: fine frames per coarse frame
 RADIUS = 10  #: fine-pass half-width around the coarse path, in fine frames
+#: weight of a horizontal or vertical DTW step (a diagonal step weighs 2): above 1 it costs to
+#: stretch one signal against the other, so real speech cannot squeeze three words into 30 ms
+#: and stretch the next across a second (GRID dev, 60 utterances: 58.9 % → 73.3 % of word
+#: boundaries within 50 ms; synthetic bench p90 15.7 → 12.6 ms)
+HV_WEIGHT = 1.5
 
 
 def _mel_filterbank(n_fft: int, sr: int, n_mels: int, fmin: float, fmax: float) -> np.ndarray:
@@ -101,12 +112,6 @@ def _match_noise(ref: np.ndarray, rec: np.ndarray) -> np.ndarray:
     return gain * ref + noise[None, :]
 
 
-def _active_seconds(mel: np.ndarray, *, hop: float = HOP) -> float:
-    e = np.log(mel.sum(axis=1) + 1e-10)
-    lo, hi = np.percentile(e, 5), np.percentile(e, 98)
-    return float((e > lo + 0.5 * (hi - lo)).sum() * hop)
-
-
 def dtw_path(x: np.ndarray, y: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """DTW between feature rows ``x`` (N, F) and ``y`` (M, F) restricted to columns
     ``[lo[i], hi[i])`` of row *i* (both non-decreasing); Euclidean local cost, symmetric steps.
@@ -122,7 +127,7 @@ def dtw_path(x: np.ndarray, y: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np
         a, b = int(lo[i]), int(hi[i])
         c = np.sqrt(((y[a:b] - x[i]) ** 2).sum(axis=1))
         if prev is None:
-            d = np.cumsum(c) if a == 0 else np.full(b - a, inf)
+            d = np.cumsum(HV_WEIGHT * c) if a == 0 else np.full(b - a, inf)
             p = np.full(b - a, 2, np.int8)
         else:
             ext = np.full(b - a + 1, inf)  # D_prev at columns a−1 … b−1
@@ -130,9 +135,9 @@ def dtw_path(x: np.ndarray, y: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np
             if s1 > s0:
                 ext[s0 - (a - 1):s1 - (a - 1)] = prev[s0 - prev_lo:s1 - prev_lo]
             diag = ext[:-1] + 2 * c
-            vert = ext[1:] + c
+            vert = ext[1:] + HV_WEIGHT * c
             bmin = np.minimum(diag, vert)
-            s = np.cumsum(c)
+            s = np.cumsum(HV_WEIGHT * c)
             with np.errstate(invalid="ignore"):
                 d = s + np.minimum.accumulate(bmin - s)
             d = np.where(np.isnan(d), inf, d)
@@ -205,71 +210,170 @@ def time_map(path: np.ndarray, *, hop: float = HOP) -> tuple[np.ndarray, np.ndar
     return ref, np.maximum.accumulate(rec)
 
 
-def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
-          voice: str | None = None, match_rate: bool = False) -> Utterance:
-    """Phoneme/word/sentence timing of a recording of ``transcript``.
+ENGINES = ("auto", "sphinx", "dtw")
+#: recording kept around the detected speech before DTW (s)
+MARGIN = 0.1
 
-    Parameters
-    ----------
-    audio : ndarray, shape (n_samples,)
-        Mono speech (float in [-1, 1] or integer PCM).
-    sr : int
-        Its sample rate in Hz (any; features are computed at 16 kHz).
-    transcript : str
-        What is said (plain text, any espeak-ng language).
-    lang, voice : str
-        espeak-ng language (and optional voice) used to render the reference.
-    match_rate : bool
-        Re-synthesise the reference at the recording's estimated speaking rate before warping
-        (off by default: on the benchmark it does not help and it hurts under noise, where the
-        rate estimate is biased).
 
-    Returns
-    -------
-    Utterance
-        ``audio``/``sr`` are the recording's; phones, words and sentences carry recording
-        times; ``meta["alignment_cost"]`` is the mean path cost per frame (higher = worse).
-    """
+def _dtw_phones(a: np.ndarray, sr: int, transcript: str, lang: str, voice: str | None,
+                act: np.ndarray) -> tuple[list[Phone], float]:
+    """espeak's phones of ``transcript`` warped onto the speech part of the recording."""
     from mimika.speech.tts import synthesize
+    from mimika.speech.vad import activity, speech_span
 
-    a = valid_audio(audio, sr=sr)
-    if len(a) < sr * 0.1:
-        raise ParameterError(f"audio is {len(a) / sr:.3f} s long; need at least 0.1 s of speech")
-    if not isinstance(transcript, str) or not transcript.strip():
-        raise ParameterError("transcript is empty; give the words spoken in the recording")
-    rec_mel = mel_power(a, sr=sr)
+    dur = len(a) / sr
+    span = speech_span(act) or (0.0, dur)
+    c0, c1 = max(0.0, span[0] - MARGIN), min(dur, span[1] + MARGIN)
+    rec = a[int(c0 * sr):round(c1 * sr)]
     ref = synthesize(transcript, lang=lang, voice=voice)
-    ref_mel = mel_power(ref.audio, sr=ref.sr)
-    rate = 175
-    if match_rate:
-        ratio = _active_seconds(ref_mel) / max(_active_seconds(rec_mel), 1e-3)
-        new_rate = int(np.clip(round(175 * ratio), 80, 450))
-        if abs(new_rate - 175) > 0.08 * 175:
-            rate = new_rate
-            ref = synthesize(transcript, lang=lang, voice=voice, rate=rate)
-            ref_mel = mel_power(ref.audio, sr=ref.sr)
+    rspan = speech_span(activity(ref.audio, sr=ref.sr)) or (0.0, ref.duration)
+    r0, r1 = max(0.0, rspan[0] - MARGIN), min(ref.duration, rspan[1] + MARGIN)
+    ref_mel = mel_power(ref.audio[int(r0 * ref.sr):round(r1 * ref.sr)], sr=ref.sr)
+    rec_mel = mel_power(rec, sr=sr)
     x = mfcc_features(_match_noise(ref_mel, rec_mel))
     y = mfcc_features(rec_mel)
     path = warp(x, y)
     cost = float(np.sqrt(((x[path[:, 0]] - y[path[:, 1]]) ** 2).sum(axis=1)).mean())
     knots_ref, knots_rec = time_map(path)
-    dur = len(a) / sr
 
     def mp(t: float) -> float:
-        return float(np.clip(np.interp(t, knots_ref, knots_rec), 0.0, dur))
+        return float(np.clip(c0 + np.interp(t - r0, knots_ref, knots_rec), 0.0, dur))
 
     phones: list[Phone] = []
     for k, p in enumerate(ref.phonemes):
-        s = 0.0 if k == 0 else mp(p.start)
-        e = dur if k == len(ref.phonemes) - 1 else mp(p.end)
-        phones.append(Phone(p.symbol, s, max(e, s), p.stress))
-    words = [Word(w.text, mp(w.start), mp(w.end), w.offset) for w in ref.words]
-    sents = [Sentence(s.text, mp(s.start), mp(s.end)) for s in ref.sentences]
-    if sents:
-        sents[0] = Sentence(sents[0].text, 0.0, sents[0].end)
-        sents[-1] = Sentence(sents[-1].text, sents[-1].start, dur)
-    log.debug("aligned %.2f s of audio to %d phones (rate %d, cost %.3f)", dur, len(phones),
-              rate, cost)
-    return Utterance(a, int(sr), phones, words, sents, lang=ref.lang, text=transcript,
-                     meta={"source": "alignment", "reference_rate": rate,
-                           "alignment_cost": round(cost, 4)})
+        s = 0.0 if k == 0 else phones[-1].end
+        e = dur if k == len(ref.phonemes) - 1 else max(mp(p.end), s)
+        phones.append(Phone(p.symbol, s, e, p.stress))
+    return phones, cost
+
+
+#: recording kept around the detected speech for pocketsphinx (s)
+SPHINX_MARGIN = 0.5
+
+
+def _sphinx_phones(a: np.ndarray, sr: int, toks, lang: str, act: np.ndarray
+                   ) -> tuple[list[Phone], list[int]]:
+    """pocketsphinx on the speech part (± 0.5 s): what lies further out is a pause."""
+    from mimika.speech import sphinx
+    from mimika.speech.vad import speech_span
+
+    dur = len(a) / sr
+    span = speech_span(act) or (0.0, dur)
+    c0 = max(0.0, span[0] - SPHINX_MARGIN)
+    c1 = min(dur, span[1] + SPHINX_MARGIN)
+    k0, k1 = round(c0 * sr), round(c1 * sr)
+    c0 = k0 / sr
+    phones, owner = sphinx.force_align(a[k0:k1], sr=sr, toks=toks, lang=lang)
+    out = [Phone(p.symbol, p.start + c0, p.end + c0, p.stress) for p in phones]
+    own = list(owner)
+    if c0 > 0:
+        if out[0].is_pause:
+            out[0] = Phone("_", 0.0, out[0].end)
+        else:
+            out.insert(0, Phone("_", 0.0, c0))
+            own.insert(0, -1)
+    if out[-1].end < dur:
+        if out[-1].is_pause:
+            out[-1] = Phone("_", out[-1].start, dur)
+        else:
+            out.append(Phone("_", out[-1].end, dur))
+            own.append(-1)
+    return out, own
+
+
+def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
+          voice: str | None = None, engine: str = "auto") -> Utterance:
+    """Phoneme/word/sentence timing of a recording of ``transcript``.
+
+    Parameters
+    ----------
+    audio : ndarray, shape (n_samples,)
+        Mono speech (float in [-1, 1] or integer PCM), any silence or noise around it.
+    sr : int
+        Its sample rate in Hz (any; features are computed at 16 kHz).
+    transcript : str
+        What is said (plain text, any espeak-ng language); numbers, abbreviations and symbols
+        as written — word timings carry the written words.
+    lang, voice : str
+        espeak-ng language (and optional voice for the DTW reference).
+    engine : ``auto`` | ``sphinx`` | ``dtw``
+        ``sphinx``: pocketsphinx forced alignment (English); ``dtw``: DTW of the speech part
+        against an espeak-ng rendition (every language); ``auto``: sphinx for English when
+        pocketsphinx is installed (falling back to dtw if it fails), else dtw.
+
+    Returns
+    -------
+    Utterance
+        ``audio``/``sr`` are the recording's; phones tile it; words are the transcript's
+        written words; ``meta["engine"]`` says which engine ran.
+    """
+    from mimika.speech import espeak, sphinx
+    from mimika.speech.tts import split_sentences
+    from mimika.speech.vad import activity, pad, refine_edges, unpad
+    from mimika.speech.words import Token, as_read, assign_phones, tokens
+
+    if engine not in ENGINES:
+        raise ParameterError(f"engine={engine!r} must be one of {', '.join(ENGINES)}")
+    a = valid_audio(audio, sr=sr)
+    if len(a) < sr * 0.1:
+        raise ParameterError(f"audio is {len(a) / sr:.3f} s long; need at least 0.1 s of speech")
+    if not isinstance(transcript, str) or not transcript.strip():
+        raise ParameterError("transcript is empty; give the words spoken in the recording")
+    code = espeak.check_lang(lang)
+    toks = [Token(t.text, t.offset, as_read(t.text) if as_read(t.text) != t.text else None)
+            for t in tokens(transcript)]
+    if not toks:
+        raise ParameterError("transcript has no words; give the words spoken in the recording")
+    act = activity(a, sr=sr)
+    use = engine if engine != "auto" else ("sphinx" if sphinx.serves(code) else "dtw")
+    meta: dict = {"source": "alignment"}
+    if use == "sphinx":
+        try:
+            phones, owner = _sphinx_phones(a, int(sr), toks, code, act)
+        except ParameterError as e:
+            if engine == "sphinx":
+                raise
+            log.warning("%s; aligning by DTW instead", e)
+            use = "dtw"
+    if use == "dtw":
+        phones, cost = _dtw_phones(a, int(sr), as_read(transcript), code, voice, act)
+        owner = assign_phones(phones, toks, lang=code)
+        meta["alignment_cost"] = round(cost, 4)
+    phones, owner = pad(phones, owner)
+    phones = refine_edges(phones, act)
+    spans: dict[int, list[float]] = {}  # from every phone, even one DTW squeezed to nothing
+    for p, o in zip(phones, owner, strict=True):
+        if o >= 0:
+            spans.setdefault(o, [p.start, p.end])[1] = p.end
+    words = [Word(t.text, spans[k][0], spans[k][1], t.offset)
+             for k, t in enumerate(toks) if k in spans]
+    phones, owner = unpad(phones, owner)
+    sents = []
+    for text, c0 in split_sentences(transcript):
+        ws = [w for w in words if c0 <= w.offset < c0 + len(text)]
+        if ws:
+            sents.append(Sentence(text, ws[0].start, ws[-1].end))
+    meta["engine"] = use
+    log.debug("aligned %.2f s of audio to %d phones with %s", len(a) / sr, len(phones), use)
+    return Utterance(a, int(sr), phones, words, sents, lang=code, text=transcript, meta=meta)
+
+
+def recognise(audio: np.ndarray, *, sr: int, lang: str = "en") -> Utterance:
+    """Lip-sync input from audio alone: the phones pocketsphinx's en-us phone model hears.
+
+    No transcript, so no words. Every language goes through the English phone model (its 39
+    phones cover the mouth shapes — viseme classes — of most languages; vowels of other
+    languages land on the nearest English one); ``lang`` only selects the viseme overrides.
+    """
+    from mimika.speech import espeak, sphinx
+
+    a = valid_audio(audio, sr=sr)
+    if len(a) < sr * 0.1:
+        raise ParameterError(f"audio is {len(a) / sr:.3f} s long; need at least 0.1 s of speech")
+    code = espeak.check_lang(lang)
+    if not sphinx.available():
+        raise ParameterError("lip-sync without a transcript needs pocketsphinx "
+                             "(pip install 'pocketsphinx==5.1.1'); or give --transcript")
+    phones = sphinx.recognise_phones(a, sr=int(sr))
+    return Utterance(a, int(sr), phones, [], [], lang="en" if code.startswith("en") else code,
+                     text="", meta={"source": "recognition", "engine": "sphinx-phones"})

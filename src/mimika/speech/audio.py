@@ -92,6 +92,36 @@ def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
     return a, int(sr)
 
 
+def read_media(path: str | os.PathLike) -> tuple[np.ndarray, int]:
+    """Read speech from a WAV file, or from any audio/video file FFmpeg decodes (MP3, M4A,
+    FLAC, OGG, MP4 … through PyAV); mono float32 and the rate in Hz."""
+    p = Path(path)
+    if p.suffix.lower() in (".wav", ".wave"):
+        return read_wav(p)
+    if not p.is_file():
+        raise DataError(f"audio file {str(p)!r} does not exist")
+    try:
+        import av
+    except ImportError:
+        raise DataError(f"reading {p.suffix} needs PyAV: pip install av (or convert to WAV: "
+                        f"'ffmpeg -i {p.name} -ac 1 out.wav')") from None
+    try:
+        with av.open(str(p)) as c:
+            if not c.streams.audio:
+                raise DataError(f"{str(p)!r} has no audio stream")
+            st = c.streams.audio[0]
+            rs = av.AudioResampler(format="flt", layout="mono", rate=st.rate or 16000)
+            parts = [f.to_ndarray().reshape(-1) for fr in c.decode(st) for f in rs.resample(fr)]
+            parts += [f.to_ndarray().reshape(-1) for f in rs.resample(None)]
+            sr = int(st.rate or 16000)
+    except av.error.FFmpegError as e:
+        raise DataError(f"cannot decode {str(p)!r}: {e}") from None
+    a = np.concatenate(parts).astype(np.float32) if parts else np.zeros(0, np.float32)
+    if a.size == 0:
+        raise DataError(f"audio file {str(p)!r} holds no samples")
+    return a, sr
+
+
 def rms_envelope(audio: np.ndarray, *, sr: int, fps: float, n_frames: int | None = None
                  ) -> np.ndarray:
     """RMS of ``audio`` in a window of ``1/fps`` s centred on each frame time; shape (n_frames,)."""

@@ -24,6 +24,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from mimika.errors import ParameterError
+from mimika.limits import check_timeline
 from mimika.speech.phonemes import Segment, segments, viseme_table
 from mimika.speech.utterance import Utterance
 from mimika.tracks import AUTrack, valid_fps
@@ -228,6 +229,7 @@ def mouth_track(utterance: Utterance, *, fps: float = 25.0, strength: float = 1.
     fps = valid_fps(fps)
     if not 0.0 <= strength <= 2.0:
         raise ParameterError(f"strength={strength} must be in [0, 2]")
+    check_timeline(utterance.duration, fps, "the speech")  # before allocating the frames
     segs = segments(utterance)
     n = max(1, math.ceil(utterance.duration * fps - 1e-9))
     sub = max(1, math.ceil(viseme_table()["coarticulation"]["subsample_hz"] / fps))

@@ -5,6 +5,14 @@ call goes through one lock. Synthesis runs in ``AUDIO_OUTPUT_SYNCHRONOUS`` mode:
 is called on the calling thread and nothing runs in the background, which also makes the
 library safe to use after ``fork``.
 
+Part of that state survives ``espeak_Terminate``/``espeak_Initialize`` (static variables of the
+wave generator), so the same text could sound a few samples different depending on what was
+spoken before. Every :func:`synth` therefore starts from a freshly loaded library: mimika
+loads a private copy of ``libespeak-ng.so`` and unloads (``dlclose``) and reloads it before a
+synthesis when anything was synthesised since the last load (≈ 6 ms), and seeds espeak-ng's
+random numbers (voice variants draw from them). The same input gives the same audio whatever
+ran before in the process, and the same as in a fresh process.
+
 Nothing here is imported by ``import mimika``; ctypes and the library load on first use.
 """
 
@@ -12,6 +20,7 @@ from __future__ import annotations
 
 import difflib
 import logging
+import os
 import threading
 from dataclasses import dataclass
 from typing import Any
@@ -33,8 +42,10 @@ _AUDIO_OUTPUT_SYNCHRONOUS = 2
 _INIT_PHONEME_EVENTS = 0x0001
 _CHARS_UTF8 = 1
 _SSML = 0x10
+_PHONEMES = 0x100  # [[mnemonics]] in the text are phonemes
 _RATE, _VOLUME, _PITCH, _RANGE = 1, 2, 3, 4
 
+RAND_SEED = 1  #: seed of espeak-ng's random numbers, set before every synthesis
 RATE_RANGE = (80, 450)  #: words per minute espeak accepts
 PITCH_RANGE = (0, 100)
 
@@ -64,8 +75,47 @@ class RawSynthesis:
     events: list[tuple[int, int, int, int, Any]]
 
 
+def _private_copy(path: str) -> str:
+    """A copy of the library in a private temporary folder (removed at exit), so that unloading
+    it really unloads it even if something else in the process opened the original."""
+    import atexit
+    import shutil
+    import tempfile
+
+    if "copy" not in _STATE:
+        d = tempfile.mkdtemp(prefix="mimika-espeak-")
+        atexit.register(shutil.rmtree, d, True)
+        dst = os.path.join(d, os.path.basename(path))
+        shutil.copy2(path, dst)
+        _STATE["copy"] = dst
+    return _STATE["copy"]
+
+
+def _unload() -> None:
+    """Terminate and unload the library (its static state goes with it)."""
+    import _ctypes
+
+    lib = _STATE.pop("lib", None)
+    if lib is None:
+        return
+    lib.espeak_Terminate()
+    handle = lib._handle
+    for k in ("cb", "voice"):
+        _STATE.pop(k, None)
+    del lib
+    _ctypes.dlclose(handle)
+
+
+def _fresh(*, after_phonemes: bool = True) -> None:
+    """Reload the library if anything was synthesised since it was loaded (or, with
+    ``after_phonemes``, anything phonemised: that may leave state a synthesis would hear)."""
+    if _STATE.get("dirty") or (after_phonemes and _STATE.get("phonemised")):
+        _unload()
+        _STATE["dirty"] = _STATE["phonemised"] = False
+
+
 def _lib():
-    """Load and initialise libespeak-ng once (under the lock); return (lib, ctypes types)."""
+    """Load and initialise libespeak-ng (under the lock); return (lib, ctypes types)."""
     if "lib" in _STATE:
         return _STATE["lib"], _STATE["types"]
     import ctypes
@@ -97,7 +147,7 @@ def _lib():
     callback_t = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(ctypes.c_short), ctypes.c_int,
                                   ctypes.POINTER(_Event))
     try:
-        lib = ctypes.CDLL(espeakng_loader.get_library_path())
+        lib = ctypes.CDLL(_private_copy(espeakng_loader.get_library_path()))
     except OSError as e:
         raise DataError(f"cannot load libespeak-ng from espeakng-loader: {e}") from e
     lib.espeak_Initialize.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_char_p, ctypes.c_int]
@@ -106,6 +156,10 @@ def _lib():
     lib.espeak_SetParameter.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int]
     lib.espeak_Synth.argtypes = [ctypes.c_char_p, ctypes.c_size_t, ctypes.c_uint, ctypes.c_int,
                                  ctypes.c_uint, ctypes.c_uint, ctypes.c_void_p, ctypes.c_void_p]
+    lib.espeak_ng_SetRandSeed.argtypes = [ctypes.c_long]
+    lib.espeak_TextToPhonemes.argtypes = [ctypes.POINTER(ctypes.c_char_p), ctypes.c_int,
+                                          ctypes.c_int]
+    lib.espeak_TextToPhonemes.restype = ctypes.c_char_p
     lib.espeak_ListVoices.argtypes = [ctypes.c_void_p]
     lib.espeak_ListVoices.restype = ctypes.POINTER(ctypes.POINTER(_Voice))
     data_path = espeakng_loader.get_data_path()
@@ -209,8 +263,11 @@ def normalize_lang(lang: str) -> str:
 
 
 def languages() -> list[str]:
-    """Every language code some espeak-ng voice speaks, sorted."""
-    return sorted({x for v in list_voices() for x in v.languages if x != "variant"})
+    """Every language code some espeak-ng voice speaks, sorted (read once per process)."""
+    if "languages" not in _STATE:
+        _STATE["languages"] = sorted({x for v in list_voices() for x in v.languages
+                                      if x != "variant"})
+    return list(_STATE["languages"])
 
 
 def check_lang(lang: str) -> str:
@@ -262,10 +319,12 @@ def _check_variant(var: str) -> str:
 
 
 def synth(text: str, *, lang: str = "en", voice: str | None = None, rate: int = 175,
-          pitch: int = 50, volume: int = 100, ssml: bool = False) -> RawSynthesis:
+          pitch: int = 50, volume: int = 100, ssml: bool = False,
+          phonemes: bool = False) -> RawSynthesis:
     """Synthesise ``text`` with one ``espeak_Synth`` call; returns int16 audio and raw events.
 
-    ``rate`` in words per minute (80–450), ``pitch`` 0–100, ``volume`` 0–200.
+    ``rate`` in words per minute (80–450), ``pitch`` 0–100, ``volume`` 0–200; ``phonemes``:
+    ``[[…]]`` in the text holds espeak phoneme mnemonics.
     """
     if not RATE_RANGE[0] <= rate <= RATE_RANGE[1]:
         raise ParameterError(f"rate={rate} must be in {RATE_RANGE[0]}…{RATE_RANGE[1]} wpm")
@@ -275,8 +334,11 @@ def synth(text: str, *, lang: str = "en", voice: str | None = None, rate: int = 
         raise ParameterError(f"volume={volume} must be in 0…200")
     data = text.encode("utf-8")
     with _LOCK:
-        lib, _ = _lib()
         name = _voice_name(lang, voice)
+        _fresh()
+        lib, _ = _lib()
+        lib.espeak_ng_SetRandSeed(RAND_SEED)  # variants (f3, klatt …) draw from rand()
+        _STATE["dirty"] = True
         if _STATE["voice"] != name:
             if lib.espeak_SetVoiceByName(name.encode()) != 0:
                 raise ParameterError(f"espeak-ng cannot load voice {name!r}")
@@ -286,7 +348,7 @@ def synth(text: str, *, lang: str = "en", voice: str | None = None, rate: int = 
         lib.espeak_SetParameter(_VOLUME, int(volume), 0)
         sink = _STATE["sink"]
         sink["chunks"], sink["events"] = [], []
-        flags = _CHARS_UTF8 | (_SSML if ssml else 0)
+        flags = _CHARS_UTF8 | (_SSML if ssml else 0) | (_PHONEMES if phonemes else 0)
         err = lib.espeak_Synth(data, len(data) + 1, 0, 0, 0, flags, None, None)
         if err != 0:
             raise DataError(f"espeak_Synth failed with code {err}")
@@ -295,3 +357,24 @@ def synth(text: str, *, lang: str = "en", voice: str | None = None, rate: int = 
         sr = int(_STATE["sr"])
     audio = np.concatenate(chunks) if chunks else np.zeros(0, np.int16)
     return RawSynthesis(audio=audio.astype(np.int16, copy=False), sr=sr, events=events)
+
+
+def text_to_phonemes(text: str, *, lang: str = "en") -> list[str]:
+    """espeak-ng's phonemes for ``text``, one string per clause: words separated by spaces,
+    phonemes by ``|``, stress marks in front (``"h|@|l|'oU w|'3:|l|d"``)."""
+    with _LOCK:
+        name = _voice_name(lang, None)
+        _fresh(after_phonemes=False)
+        lib, (ctypes, _) = _lib()
+        _STATE["phonemised"] = True
+        if _STATE["voice"] != name:
+            if lib.espeak_SetVoiceByName(name.encode()) != 0:
+                raise ParameterError(f"espeak-ng cannot load voice {name!r}")
+            _STATE["voice"] = name
+        buf = ctypes.c_char_p(text.encode("utf-8"))
+        ptr = ctypes.pointer(buf)
+        out: list[str] = []
+        while ptr.contents.value:
+            r = lib.espeak_TextToPhonemes(ptr, _CHARS_UTF8, ord("|") << 8)
+            out.append((r or b"").decode("utf-8", "replace"))
+    return out

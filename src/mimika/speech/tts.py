@@ -12,6 +12,7 @@ import re
 import numpy as np
 
 from mimika.errors import ParameterError
+from mimika.limits import check_speech
 from mimika.speech.utterance import Phone, Sentence, Utterance, Word
 
 log = logging.getLogger(__name__)
@@ -62,18 +63,17 @@ def _strip_stress(sym: str) -> tuple[str, int]:
     return sym, stress
 
 
-def events_to_timing(events, *, n_samples: int, sr: int, text: str, t0: float = 0.0,
-                     char0: int = 0) -> tuple[list[Phone], list[Word]]:
-    """Turn raw espeak events into tiled phones and words (times offset by ``t0`` s).
+def events_to_phones(events, *, n_samples: int, sr: int, t0: float = 0.0) -> list[Phone]:
+    """Turn raw espeak phoneme events into phones tiling the audio (times offset by ``t0`` s).
 
     ``events`` are ``(type, text_position, length, sample, payload)`` tuples as produced by
-    :func:`mimika.speech.espeak.synth`; ``char0`` is the character offset of ``text``.
+    :func:`mimika.speech.espeak.synth`. Words are timed from the phones by
+    :mod:`mimika.speech.words` (espeak's word events do not follow expanded text).
     """
-    from mimika.speech.espeak import EV_PHONEME, EV_WORD
+    from mimika.speech.espeak import EV_PHONEME
 
     starts: list[tuple[int, str, int]] = []
-    word_ev: list[tuple[int, int, int]] = []
-    for typ, tpos, length, sample, payload in events:
+    for typ, _tpos, _length, sample, payload in events:
         if typ == EV_PHONEME:
             sym, stress = _strip_stress(str(payload))
             if not sym or (sym.startswith("(") and sym.endswith(")")):
@@ -81,8 +81,6 @@ def events_to_timing(events, *, n_samples: int, sr: int, text: str, t0: float = 
             if sym.startswith("_"):
                 sym = "_"
             starts.append((int(sample), sym, stress))
-        elif typ == EV_WORD:
-            word_ev.append((int(sample), int(tpos), int(length)))
     starts.sort(key=lambda s: s[0])
     bounds: list[tuple[int, int, str, int]] = []
     prev = 0
@@ -105,19 +103,7 @@ def events_to_timing(events, *, n_samples: int, sr: int, text: str, t0: float = 
             bounds.append((bounds[-1][1], n_samples, "_", 0))
     if not bounds and n_samples > 0:
         bounds = [(0, n_samples, "_", 0)]
-    phones = [Phone(sym, t0 + s / sr, t0 + e / sr, st) for s, e, sym, st in bounds]
-
-    words: list[Word] = []
-    for k, (sample, tpos, length) in enumerate(word_ev):
-        t_ev = t0 + sample / sr
-        t_next = t0 + (word_ev[k + 1][0] if k + 1 < len(word_ev) else n_samples) / sr
-        inside = [p for p in phones if t_ev - 0.002 <= p.start < t_next - 0.002
-                  and not p.is_pause]
-        start = inside[0].start if inside else t_ev
-        end = min(inside[-1].end, t_next) if inside else t_next
-        word_text = text[tpos - 1:tpos - 1 + length] if tpos > 0 else ""
-        words.append(Word(word_text, start, max(end, start), char0 + tpos - 1 if tpos > 0 else -1))
-    return phones, words
+    return [Phone(sym, t0 + s / sr, t0 + e / sr, st) for s, e, sym, st in bounds]
 
 
 def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: int = 175,
@@ -128,8 +114,8 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
     ----------
     text : str
         Plain text (split into sentences, each synthesised on its own) or, with ``ssml=True``,
-        an SSML document (``<speak>``, ``<prosody rate= pitch=>``, ``<break time=>`` … as
-        espeak-ng's SSML mode supports them), synthesised in one piece.
+        an SSML document (see :mod:`mimika.speech.ssml`: break, prosody, emphasis, sub,
+        phoneme, say-as, lang, voice, audio). Words carry the text as written.
     lang : str
         espeak-ng language code: ``en``, ``en-us``, ``de``, ``pl`` … (``mimika voices``).
     voice : str, optional
@@ -145,11 +131,18 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
         ``audio`` shape (n_samples,), ``sr`` 22 050; phones tile the whole audio.
     """
     from mimika.speech import espeak
+    from mimika.speech.words import tokens, word_times
 
     if not isinstance(text, str) or not text.strip():
         raise ParameterError("text is empty; give at least one word to speak")
+    check_speech(text, rate)  # before synthesising (mimika.limits)
     code = espeak.check_lang(lang)
-    pieces = [(text, 0)] if ssml else split_sentences(text)
+    if ssml:
+        from mimika.speech.ssml import parse, speak
+
+        return speak(parse(text), lang=code, voice=voice, rate=rate, pitch=pitch,
+                     volume=volume)[0]
+    pieces = split_sentences(text)
     if not pieces:
         raise ParameterError("text is empty; give at least one word to speak")
     chunks: list[np.ndarray] = []
@@ -159,12 +152,11 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
     n_total = 0
     sr = espeak.sample_rate()
     for sent, char0 in pieces:
-        raw = espeak.synth(sent, lang=code, voice=voice, rate=rate, pitch=pitch, volume=volume,
-                           ssml=ssml)
+        raw = espeak.synth(sent, lang=code, voice=voice, rate=rate, pitch=pitch, volume=volume)
         sr = raw.sr
         t0 = n_total / sr
-        ph, ws = events_to_timing(raw.events, n_samples=len(raw.audio), sr=sr, text=sent,
-                                  t0=t0, char0=char0)
+        ph = events_to_phones(raw.events, n_samples=len(raw.audio), sr=sr, t0=t0)
+        ws = word_times(ph, tokens(sent, offset=char0), lang=code)
         if phones and ph and phones[-1].is_pause and ph[0].is_pause:
             phones[-1] = Phone("_", phones[-1].start, ph[0].end)
             ph = ph[1:]
@@ -172,7 +164,7 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
         words += ws
         chunks.append(raw.audio)
         n_total += len(raw.audio)
-        sents.append(Sentence(_plain(sent) if ssml else sent, t0, n_total / sr))
+        sents.append(Sentence(sent, t0, n_total / sr))
     audio = (np.concatenate(chunks).astype(np.float32) / 32768.0) if chunks else np.zeros(0)
     log.debug("synthesised %d sentences, %.2f s, %d phones", len(sents), n_total / sr,
               len(phones))
@@ -181,7 +173,3 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
     return Utterance(audio.astype(np.float32), sr, phones, words, sents, lang=code, text=text,
                      meta={"source": "espeak-ng", "voice": voice or code, "rate": rate,
                            "pitch": pitch})
-
-
-def _plain(ssml: str) -> str:
-    return re.sub(r"\s+", " ", re.sub(r"<[^>]*>", " ", ssml)).strip()

@@ -17,6 +17,7 @@ import numpy as np
 
 from mimika.errors import DataError, ParameterError
 from mimika.io.atomic import atomic_write
+from mimika.limits import loads_json
 
 FORMAT_VERSION = 1
 
@@ -136,8 +137,8 @@ class Utterance:
     @classmethod
     def load_timing(cls, path: str | os.PathLike) -> Utterance:
         try:
-            d = json.loads(Path(path).read_text("utf-8"))
-        except (OSError, json.JSONDecodeError) as e:
+            d = loads_json(Path(path).read_bytes(), str(path))
+        except (OSError, DataError) as e:
             raise DataError(f"cannot read timing file {str(path)!r}: {e}") from None
         return cls.from_timing_dict(d)
 

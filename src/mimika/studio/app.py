@@ -1,13 +1,16 @@
 """The studio's FastAPI application: routers by topic, JSON errors, request limits, static page.
 
-Every error reaches the client as ``{"error": "…"}`` with a 4xx status (5xx only for bugs);
-request bodies are limited to :data:`MAX_BODY` bytes; requests from another origin are refused.
+Every error reaches the client as ``{"error": "…"}`` with a 4xx status (5xx only for bugs and
+exports past their time limit); request bodies are limited to :data:`MAX_BODY` bytes;
+requests naming a Host the studio does not serve (DNS rebinding, :mod:`mimika.studio.guard`)
+and writes from another origin are refused.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -18,15 +21,17 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 import mimika
+from mimika import limits
 from mimika.errors import MimikaError
+from mimika.face.heads import DEFAULT_HEAD
 from mimika.studio.state import StudioState
 
 log = logging.getLogger(__name__)
 
 STATIC = Path(__file__).parent / "static"
 VENDOR = STATIC / "vendor" / "three" / "three.module.js"
-#: largest accepted request body (bytes) and WebSocket message
-MAX_BODY = 2 * 1024 * 1024
+#: largest accepted request body (bytes) and WebSocket message (mimika.limits: max_body)
+MAX_BODY = limits.DEFAULTS.max_body
 
 
 def error_response(status: int, message: str, **extra: Any) -> JSONResponse:
@@ -35,7 +40,12 @@ def error_response(status: int, message: str, **extra: Any) -> JSONResponse:
 
 def _status_of(e: MimikaError) -> int:
     from mimika.markup.project import ProjectError
+    from mimika.studio.jobs import Cancelled
 
+    if isinstance(e, Cancelled):
+        return 409
+    if isinstance(e, limits.LimitError) and e.limit == "max_export_seconds":
+        return 503
     return 422 if isinstance(e, ProjectError) else 400
 
 
@@ -106,31 +116,34 @@ async def _send_json(send: Any, status: int, message: str) -> None:
 
 
 def _validation_message(exc: RequestValidationError) -> str:
-    parts = []
-    for err in exc.errors()[:5]:
-        loc = ".".join(str(x) for x in err.get("loc", ()) if x != "body")
-        msg = str(err.get("msg", "invalid")).removeprefix("Value error, ")
-        parts.append(f"{loc}: {msg}" if loc else msg)
-    return "; ".join(parts) or "invalid request"
+    from mimika.studio.messages import validation_message
+
+    return validation_message(list(exc.errors()))
 
 
-def create_app(projects_dir: str | Path, *, head: str = "builtin",
+def create_app(projects_dir: str | Path, *, head: str = DEFAULT_HEAD,
                library_path: str | Path | None = None,
-               controller_path: str | Path | None = None, max_body: int = MAX_BODY,
-               warm_up: bool = False) -> FastAPI:
+               controller_path: str | Path | None = None, max_body: int | None = None,
+               warm_up: bool = False, host: str = "127.0.0.1",
+               allowed_hosts: Iterable[str] = ()) -> FastAPI:
     """The studio app serving ``projects_dir``.
 
     Parameters
     ----------
     projects_dir : folder of project files (``NAME.json``); created if missing
-    head : ``builtin`` or ``ict``
+    head : the head the page opens with (a name from ``mimika heads`` or a file; default the
+        default character)
     library_path : user expression library (default ``$MIMIKA_DATA_DIR/expressions.json``)
     controller_path : a WGAN checkpoint for the latent sliders (default: the shipped one)
-    max_body : request size limit in bytes
+    max_body : request size limit in bytes (default: ``mimika.limits`` max_body)
     warm_up : load the head and espeak-ng in the background at start-up
+    host : the address the server binds; requests must name it (or an allowed name) as Host
+    allowed_hosts : more Host names to answer (``*.example.org`` matches subdomains)
     """
     from contextlib import asynccontextmanager
 
+    from mimika.studio.guard import HostGuard, HostPolicy
+    from mimika.studio.jobs import Jobs, sweep_temp_dirs
     from mimika.studio.routers import ROUTERS
 
     state = StudioState(projects_dir, head=head, library_path=library_path,
@@ -144,12 +157,17 @@ def create_app(projects_dir: str | Path, *, head: str = "builtin",
             threading.Thread(target=_warm, args=(state,), name="studio-warm-up",
                              daemon=True).start()
         yield
+        app.state.jobs.cancel_all("the studio is stopping")
 
     app = FastAPI(title="mimika studio", version=mimika.__version__, lifespan=lifespan,
                   docs_url="/api/docs", redoc_url=None, openapi_url="/api/openapi.json")
+    max_body = max_body or limits.current().max_body
+    sweep_temp_dirs()  # export folders of a studio that was killed
     app.state.studio = state
     app.state.max_body = max_body
+    app.state.jobs = Jobs()
     app.add_middleware(LimitsMiddleware, max_body=max_body)
+    app.add_middleware(HostGuard, policy=HostPolicy(host, allowed_hosts))  # outermost
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -157,18 +175,22 @@ def create_app(projects_dir: str | Path, *, head: str = "builtin",
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
-        msg = exc.detail if isinstance(exc.detail, str) else json.dumps(exc.detail)
+        extra = dict(exc.detail) if isinstance(exc.detail, dict) else {}
+        msg = (exc.detail if isinstance(exc.detail, str) else
+               str(extra.pop("error", "")) or json.dumps(exc.detail))
         if exc.status_code == 404 and msg == "Not Found":
             msg = f"no such endpoint or file: {request.url.path}"
         if exc.status_code == 405:
             msg = f"{request.method} is not allowed on {request.url.path}"
-        return error_response(exc.status_code, msg)
+        return error_response(exc.status_code, msg, **extra)
 
     @app.exception_handler(MimikaError)
     async def _mimika(request: Request, exc: MimikaError) -> JSONResponse:
         problems = getattr(exc, "problems", None)
         extra = {"problems": problems} if problems else {}
-        return error_response(_status_of(exc), str(exc), **extra)
+        from mimika.studio.messages import plain
+
+        return error_response(_status_of(exc), plain(str(exc)), **extra)
 
     @app.exception_handler(Exception)
     async def _bug(request: Request, exc: Exception) -> JSONResponse:
@@ -192,9 +214,9 @@ def _warm(state: StudioState) -> None:
     """Load the head, build its GLB and start espeak-ng so the first request is fast."""
     try:
         state.glb()
-        from mimika.studio.speaking import synth_segment
+        from mimika.studio.speaking import warm
 
-        synth_segment(state, "Ready.", 0, 0.0, lang="en", rate=175, fps=30.0)
+        warm(state)
         log.info("studio: warm")
     except MimikaError as e:  # reported again on first use
         log.warning("studio: warm-up failed: %s", e)

@@ -2,40 +2,58 @@
 
 from __future__ import annotations
 
-import re
+import unicodedata
 from pathlib import Path
 
 from mimika.errors import ParameterError
 
-#: letters, digits, '-', '_' and inner spaces; 1–64 characters; no dots, no slashes
-_NAME_RE = re.compile(r"^[A-Za-z0-9](?:[A-Za-z0-9 _\-]{0,62}[A-Za-z0-9_\-])?$")
 _RESERVED = {"con", "prn", "aux", "nul", *(f"com{i}" for i in range(10)),
              *(f"lpt{i}" for i in range(10))}
+#: characters allowed besides letters and digits (any script)
+_EXTRA = "-_ "
+#: longest name in characters, and in UTF-8 bytes (file names end at 255 bytes)
+MAX_CHARS, MAX_BYTES = 64, 200
 SUFFIX = ".json"
+RULE = "use 1–64 letters, digits, '-', '_' or spaces between them (no dots or slashes)"
+
+
+def _allowed(ch: str) -> bool:
+    return ch.isalnum() or ch in _EXTRA
 
 
 def check_project_name(name: str) -> str:
-    """Return ``name`` if it is a safe project name, else raise :class:`ParameterError`.
+    """Return ``name`` (NFC-normalised) if it is a safe project name, else raise
+    :class:`ParameterError`.
 
-    Allowed: 1–64 letters, digits, ``-``, ``_`` and inner spaces, starting with a letter or
-    digit. Rejected: ``..``, slashes, backslashes, absolute paths, dots, control characters.
+    Allowed: 1–64 letters or digits of any script, ``-``, ``_`` and inner spaces
+    (``Grüße``, ``Zażółć``, ``-draft`` are fine). Rejected: dots, slashes, backslashes,
+    colons, control characters, leading or trailing spaces and Windows device names.
     """
-    if not isinstance(name, str) or not name:
-        raise ParameterError("project name is empty; use letters, digits, '-', '_' or spaces")
-    if len(name) > 64:
-        raise ParameterError(f"project name {name[:20]!r}… is {len(name)} characters; "
-                             "use at most 64")
-    if not _NAME_RE.match(name) or name.lower() in _RESERVED:
-        raise ParameterError(f"project name {name!r} is not allowed: use 1–64 letters, digits, "
-                             "'-', '_' or inner spaces (no dots, slashes or '..')")
+    if not isinstance(name, str) or not name.strip():
+        raise ParameterError(f"the project needs a name: {RULE}")
+    name = unicodedata.normalize("NFC", name)
+    if len(name) > MAX_CHARS or len(name.encode("utf-8")) > MAX_BYTES:
+        raise ParameterError(f"the project name “{name[:20]}…” is too long: use at most "
+                             f"{MAX_CHARS} characters")
+    bad = sorted({ch for ch in name if not _allowed(ch)})
+    if bad:
+        shown = ", ".join(repr(c) if c.isprintable() else f"U+{ord(c):04X}" for c in bad[:4])
+        raise ParameterError(f"the project name “{name}” is not allowed: it contains {shown}; "
+                             f"{RULE}")
+    if name != name.strip():
+        raise ParameterError(f"the project name “{name}” is not allowed: it starts or ends "
+                             f"with a space; {RULE}")
+    if name.lower() in _RESERVED:
+        raise ParameterError(f"the project name “{name}” is not allowed: it is a reserved "
+                             "device name on Windows; choose another")
     return name
 
 
 def project_path(projects_dir: Path, name: str) -> Path:
     """The file of project ``name`` inside ``projects_dir`` (checked to stay inside it)."""
-    check_project_name(name)
+    name = check_project_name(name)
     root = projects_dir.resolve()
     p = (root / (name + SUFFIX)).resolve()
     if p.parent != root:
-        raise ParameterError(f"project name {name!r} would leave the projects folder")
+        raise ParameterError(f"the project name “{name}” would leave the projects folder")
     return p

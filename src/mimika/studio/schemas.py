@@ -85,6 +85,12 @@ class ExportRequest(_Strict):
     fps: float = Field(30.0, ge=1, le=120)
     format: Literal["au", "openface", "arkit"] = "au"
     name: str = Field("mimika", min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_\-]+$")
+    #: for a pose (a project names its own): the head, view and look
+    head: str | None = Field(None, max_length=200)
+    view: Literal["front", "three-quarter", "profile"] = "front"
+    look: Literal["plain", "news"] = "plain"
+    #: speech the page has (a recording): used instead of synthesising the project's text
+    speech_key: str | None = Field(None, pattern=r"^[0-9a-f]{20}$")
 
     check_aus = field_validator("aus")(lambda v: None if v is None else _check_aus(v))
 
@@ -99,3 +105,29 @@ class LatentRequest(_Strict):
         if any(not -5.0 <= x <= 5.0 for x in v):
             raise ValueError("latent values must be within [-5, 5]")
         return v
+
+
+class StillRequest(_Strict):
+    """A PNG of one pose (``aus``) on a head, as the renderer draws it."""
+
+    aus: AUValues = Field(default_factory=dict)
+    head: str | None = Field(None, max_length=200)
+    view: Literal["front", "three-quarter", "profile"] = "front"
+    look: Literal["plain", "news"] = "plain"
+    width: int = Field(640, ge=64, le=1920)
+    height: int = Field(480, ge=64, le=1920)
+    blend: bool = False
+    disabled: list[str] = Field(default_factory=list, max_length=100)
+
+    check_aus = field_validator("aus")(_check_aus)
+
+
+class SheetRequest(_Strict):
+    """A contact sheet of library expressions (default: all) on a head."""
+
+    names: list[str] | None = Field(None, max_length=120)
+    head: str | None = Field(None, max_length=200)
+    view: Literal["front", "three-quarter", "profile"] = "front"
+    look: Literal["plain", "news"] = "plain"
+    tile: int = Field(200, ge=96, le=512)
+    columns: int = Field(6, ge=1, le=12)

@@ -13,7 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from mimika.errors import DataError, MimikaError
+from mimika import limits
+from mimika.errors import DataError, MimikaError, ParameterError
+from mimika.face.heads import DEFAULT_HEAD
 
 log = logging.getLogger(__name__)
 
@@ -30,6 +32,8 @@ class SpeechSegment:
     t0: float
     utterance: Any  # mimika.speech.Utterance (sentence-local times)
     mouth: Any  # AUTrack of the sentence's mouth AUs (sentence-local)
+    #: behaviour tracks by (layers, fps), filled by mimika.studio.speaking
+    behaviour: dict = field(default_factory=dict)
 
     @property
     def duration(self) -> float:
@@ -51,6 +55,11 @@ class SpeechEntry:
     def duration(self) -> float:
         return sum(s.duration for s in self.segments)
 
+    @property
+    def nbytes(self) -> int:
+        """Memory of the audio and mouth frames it holds."""
+        return sum(s.utterance.audio.nbytes + s.mouth.values.nbytes for s in self.segments)
+
     def audio(self) -> tuple[np.ndarray, int]:
         sr = self.segments[0].utterance.sr if self.segments else 22050
         parts = [s.utterance.audio for s in self.segments]
@@ -59,12 +68,11 @@ class SpeechEntry:
 
 def gltf_bytes(rig: Any, track: Any, *, name: str = "mimika") -> bytes:
     """``rig``'s head (+ ``track``'s animation) as GLB bytes, through :func:`write_gltf`."""
-    import tempfile
-
     from mimika.io.gltf import write_gltf
+    from mimika.studio.jobs import temp_dir
 
-    with tempfile.TemporaryDirectory(prefix="mimika-studio-") as d:
-        return write_gltf(Path(d) / f"{name}.glb", rig, track).read_bytes()
+    with temp_dir() as d:
+        return write_gltf(d / f"{name}.glb", rig, track).read_bytes()
 
 
 def speech_key(text: str, lang: str, rate: int) -> str:
@@ -82,22 +90,22 @@ class StudioState:
     library_path : the user expression library (default: the user's library)
     """
 
-    def __init__(self, projects_dir: str | Path, *, head: str = "builtin",
+    def __init__(self, projects_dir: str | Path, *, head: str = DEFAULT_HEAD,
                  library_path: str | Path | None = None, controller_path: str | Path | None = None,
-                 speech_cache: int = 32):
+                 speech_cache: int = 32, heads_cache: int = 2):
         self.projects_dir = Path(projects_dir)
         self.projects_dir.mkdir(parents=True, exist_ok=True)
-        if head not in ("builtin", "ict") and not (
-                Path(head).suffix.lower() in (".glb", ".gltf", ".vrm") and Path(head).is_file()):
-            raise DataError(f"studio head {head!r} must be 'builtin', 'ict' or a .glb/.gltf/.vrm "
-                            "character file")
+        names = head_names()
+        if head not in names and not Path(head).exists():
+            raise DataError(f"studio head {head!r} is not one of the heads here "
+                            f"({', '.join(names)}) nor a file (run 'mimika heads')")
         self.head_name = head
         self.library_path = Path(library_path) if library_path is not None else None
         self.controller_path = controller_path
         self._head_lock = threading.Lock()
-        self._rig: Any = None
-        self._glb: bytes | None = None
-        self._glb_etag = ""
+        #: loaded heads by name, most recently used last: (rig, glb bytes or None, etag)
+        self._heads: OrderedDict[str, list[Any]] = OrderedDict()
+        self._heads_max = heads_cache
         self._lib_lock = threading.Lock()
         self.espeak_lock = threading.Lock()  # espeak-ng is not re-entrant
         self._speech: OrderedDict[str, SpeechEntry] = OrderedDict()
@@ -109,30 +117,68 @@ class StudioState:
         self._ctl_tried = False
 
     # -- head ---------------------------------------------------------------------------------
-    def rig(self) -> Any:
+    def head(self, name: str | None = None) -> str:
+        """``name`` checked against :func:`list_heads` (default: the studio's start-up head)."""
+        if name is None or name == self.head_name:
+            return self.head_name
+        infos = {h.name: h for h in self.head_infos()}
+        if name not in infos:
+            raise ParameterError(f"there is no head called {name!r}; heads: "
+                                 f"{', '.join(infos)}")
+        if not infos[name].available:
+            raise DataError(f"the {name} head is not installed on this computer (see "
+                            "'mimika heads')")
+        return name
+
+    def head_infos(self) -> list[Any]:
+        """The heads the page offers: :func:`head_infos` plus the start-up head when it is a
+        file (a character file or glTF avatar)."""
+        infos = head_infos()
+        if self.head_name not in {h.name for h in infos}:
+            from mimika.face.heads import HeadInfo
+
+            infos.append(HeadInfo(self.head_name, "file", True, f"from {self.head_name}"))
+        return infos
+
+    def head_names(self) -> list[str]:
+        return [h.name for h in self.head_infos()]
+
+    def _entry(self, name: str | None) -> list[Any]:
+        name = self.head(name)
         with self._head_lock:
-            if self._rig is None:
+            e = self._heads.get(name)
+            if e is None:
                 from mimika.face.heads import load_head
 
-                _, self._rig = load_head(self.head_name)
-                log.info("studio: loaded head %s", self.head_name)
-            return self._rig
+                _, rig = load_head(name)
+                log.info("studio: loaded head %s", name)
+                e = self._heads[name] = [rig, None, ""]
+                while len(self._heads) > self._heads_max:
+                    self._heads.popitem(last=False)
+            self._heads.move_to_end(name)
+            return e
 
-    def glb(self) -> tuple[bytes, str]:
-        """The head as GLB (no animation) and its ETag; built once."""
-        rig = self.rig()
+    def rig(self, name: str | None = None) -> Any:
+        """The rig of head ``name`` (loaded once; the last few heads stay loaded)."""
+        return self._entry(name)[0]
+
+    def glb(self, name: str | None = None) -> tuple[bytes, str]:
+        """Head ``name`` as GLB (no animation) and its ETag; built once per head."""
+        e = self._entry(name)
         with self._head_lock:
-            if self._glb is None:
-                self._glb = gltf_bytes(rig, None, name=self.head_name)
-                self._glb_etag = '"' + hashlib.sha1(self._glb).hexdigest()[:16] + '"'
-            return self._glb, self._glb_etag
+            if e[1] is None:
+                e[1] = gltf_bytes(e[0], None, name=self.head(name))
+                e[2] = '"' + hashlib.sha1(e[1]).hexdigest()[:16] + '"'
+            return e[1], e[2]
 
-    def head_info(self) -> dict[str, Any]:
-        """Supported AUs by FACS group and the rigid motions the page applies to joints."""
+    def head_info(self, name: str | None = None) -> dict[str, Any]:
+        """Supported AUs by FACS group, the rigid motions the page applies to joints and the
+        face's frame (centre, height, width in metres) for the camera presets."""
         from mimika.facs import AU_CATALOGUE
         from mimika.io.gltf import SCALE, rig_motion
+        from mimika.render.camera import face_frame
 
-        rig = self.rig()
+        rig = self.rig(name)
         motion = rig_motion(rig)
         sup = list(rig.supported)
         groups: dict[str, list[dict[str, Any]]] = {g: [] for g in GROUPS}
@@ -143,14 +189,19 @@ class StudioState:
             if a.group in groups:
                 groups[a.group].append({"code": code, "name": a.name,
                                         "sided": bool(a.sided and code + "L" in sup)})
+        centre, height, width = face_frame(rig.head)
         return {
-            "head": self.head_name,
+            "head": self.head(name),
             "aus": sup,
             "groups": [{"name": g, "aus": v} for g, v in groups.items() if v],
             "motion": {k: {c: [float(x) for x in np.asarray(v).ravel()]
                            for c, v in motion[k].items()}
                        for k in ("head_rot", "head_tr", "eye_rot")},
             "scale": SCALE,
+            "frame": {"centre": [float(x) * SCALE for x in centre],
+                      "height": float(height) * SCALE, "width": float(width) * SCALE,
+                      "eye_y": float(rig.head.landmark_points()[36:48, 1].mean()) * SCALE,
+                      "body": any(o.category == "body" for o in rig.head.objects)},
         }
 
     # -- expression library ------------------------------------------------------------------
@@ -165,11 +216,16 @@ class StudioState:
 
     # -- speech cache -------------------------------------------------------------------------
     def put_speech(self, entry: SpeechEntry) -> None:
+        """Cache ``entry``; the oldest go once over ``speech_cache`` entries or
+        ``max_cache_mb`` megabytes (:mod:`mimika.limits`), the newest always stays."""
+        cap = limits.current().max_cache_mb * 1e6
         with self._speech_lock:
             self._speech[entry.key] = entry
             self._speech.move_to_end(entry.key)
-            while len(self._speech) > self._speech_max:
-                self._speech.popitem(last=False)
+            size = sum(e.nbytes for e in self._speech.values())
+            while len(self._speech) > 1 and (len(self._speech) > self._speech_max or
+                                             size > cap):
+                size -= self._speech.popitem(last=False)[1].nbytes
 
     def get_speech(self, key: str) -> SpeechEntry | None:
         with self._speech_lock:
@@ -215,6 +271,18 @@ class StudioState:
             except (ImportError, ValueError, MimikaError):
                 continue
         return None
+
+
+def head_infos() -> list[Any]:
+    """:func:`mimika.face.heads.list_heads` (the heads mimika knows, installed or not)."""
+    from mimika.face.heads import list_heads
+
+    return list_heads()
+
+
+def head_names() -> list[str]:
+    """Names of every head :func:`mimika.face.heads.list_heads` knows (installed or not)."""
+    return [h.name for h in head_infos()]
 
 
 GROUPS = ("upper face", "lower face linear", "lower face orbital", "head", "eyes")

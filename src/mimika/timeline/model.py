@@ -18,6 +18,7 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 
+from mimika import limits
 from mimika.errors import ParameterError
 from mimika.facs import parse_au
 from mimika.timeline.easing import check_easing
@@ -45,6 +46,8 @@ KIND_TIMING = {"gaze": (1.0, 0.15, 0.15), "tilt": (1.2, 0.3, 0.3), "turn": (1.2,
                "blink": (0.3, 0.1, 0.15), "nod": (0.6, 0.0, 0.0), "shake": (0.8, 0.0, 0.0),
                "aus": (1.0, 0.25, 0.25)}
 _EPS = 1e-9
+#: most repetitions of a nod or shake
+MAX_COUNT = 100
 
 
 def _finite(v: float, what: str) -> float:
@@ -97,6 +100,9 @@ class Event:
             raise ParameterError(f"{w}start={start:g} s is negative; events start at ≥ 0 s")
         if dur <= 0:
             raise ParameterError(f"{w}dur={dur:g} s must be > 0")
+        if start + dur > limits.current().max_duration:
+            raise limits.over("max_duration", f"{w}the {self.kind} event ends at "
+                                              f"{start + dur:g} s")
         object.__setattr__(self, "start", start)
         object.__setattr__(self, "duration", dur)
         k = float(self.intensity)
@@ -115,8 +121,8 @@ class Event:
                                  f"do not fit into dur={dur:g} s")
         if self.ease is not None:
             object.__setattr__(self, "ease", check_easing(self.ease))
-        if int(self.count) < 1:
-            raise ParameterError(f"{w}count={self.count!r} must be ≥ 1")
+        if not 1 <= int(self.count) <= MAX_COUNT:
+            raise ParameterError(f"{w}count={self.count!r} must be within 1…{MAX_COUNT}")
         object.__setattr__(self, "count", int(self.count))
         if self.kind == "aus":
             pairs = []
@@ -291,6 +297,7 @@ class Timeline:
             d = _finite(self.duration, "duration")
             if d <= 0:
                 raise ParameterError(f"duration={d:g} s must be > 0")
+            limits.check_duration(d, "the timeline's duration")
             object.__setattr__(self, "duration", d)
 
     # -- access

@@ -21,6 +21,7 @@ import numpy as np
 
 from mimika.errors import ParameterError
 from mimika.facs import BODY_CHANNELS, is_body, parse_au
+from mimika.limits import check_timeline
 from mimika.timeline.easing import get_interpolator
 from mimika.timeline.model import DIRECTIONS, KIND_TIMING, Channel, Event, Timeline
 from mimika.tracks import AUTrack, valid_fps
@@ -236,7 +237,7 @@ def sample(
     end = timeline.end if duration is None else float(duration)
     if not math.isfinite(end) or end < 0:
         raise ParameterError(f"duration={duration!r} must be ≥ 0 seconds")
-    n = max(1, math.ceil(end * fps - 1e-9) + 1)
+    n = check_timeline(end, fps, "the timeline")  # before allocating the frames
     t = np.arange(n) / fps
     vals, codes = sample_times(timeline, t, library=library)
     track = AUTrack(vals if codes else np.zeros((n, 0), np.float32), codes, fps,

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -16,6 +15,7 @@ from mimika.face.rigs.field import (
     FieldRig,
     parse_fields,
 )
+from mimika.limits import loads_json
 
 log = logging.getLogger(__name__)
 
@@ -101,10 +101,7 @@ def read_fields_json(path: str | Path) -> dict:
         text = p.read_text("utf-8")
     except OSError as e:
         raise DataError(f"cannot read fields file {p}: {e.strerror}") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as e:
-        raise DataError(f"{p}:{e.lineno}:{e.colno}: invalid JSON: {e.msg}") from None
+    return loads_json(text, str(p))  # hostile JSON (NaN, huge integers, deep nests): DataError
 
 
 #: landmark rms (cm) above which a fitted file is aligned to the head it is loaded on

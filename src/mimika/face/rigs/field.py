@@ -28,6 +28,7 @@ from mimika.errors import DataError, ParameterError
 from mimika.face.head import Head
 from mimika.face.rig import Positions, Rig, split_sides
 from mimika.facs import AU_CATALOGUE, parse_au
+from mimika.limits import loads_json
 
 log = logging.getLogger(__name__)
 
@@ -450,11 +451,7 @@ def load_fields(path: str | Path | None = None) -> FieldSet:
         text = p.read_text("utf-8")
     except OSError as e:
         raise DataError(f"cannot read fields file {p}: {e.strerror}") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise DataError(f"{p}:{e.lineno}:{e.colno}: invalid JSON: {e.msg}") from None
-    return parse_fields(data, source=str(p))
+    return parse_fields(loads_json(text, str(p)), source=str(p))  # hostile JSON: DataError
 
 
 # --- the rig -----------------------------------------------------------------------------------

@@ -5,11 +5,13 @@ from mimika.studio.routers import (
     expressions,
     face,
     latent,
+    look,
     projects,
+    recording,
     speech,
 )
 
 ROUTERS = (face.router, expressions.router, projects.router, speech.router, export.router,
-           latent.router)
+           latent.router, look.router, recording.router)
 
 __all__ = ["ROUTERS"]

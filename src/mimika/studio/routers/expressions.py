@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, HTTPException, Request
 
+from mimika.errors import ParameterError
 from mimika.studio.routers._deps import state_of
 from mimika.studio.schemas import ExpressionCreate
 
@@ -32,9 +33,20 @@ def create_expression(req: ExpressionCreate, request: Request) -> dict[str, Any]
     """Save the sliders as a user expression (atomic write of the user library)."""
     st = state_of(request)
     with st.library_lock:
-        e = st.library().create(req.name, req.aus, onset=req.onset, duration=req.duration,
-                                offset=req.offset, description=req.description,
-                                force=req.force)
+        lib = st.library()
+        key = req.name.strip().lower().replace(" ", "-")
+        if not req.aus:
+            raise ParameterError("an expression needs at least one Action Unit: move a slider "
+                                 "first")
+        if not req.force and key in lib:
+            kind = "built-in" if key not in lib.user_names() else "yours"
+            raise HTTPException(409, detail={
+                "error": f"there is already an expression called “{key}” "
+                         f"({'a built-in one' if kind == 'built-in' else 'in your library'}); "
+                         "choose another name or replace it",
+                "code": "exists", "name": key, "builtin": kind == "built-in"})
+        e = lib.create(req.name, req.aus, onset=req.onset, duration=req.duration,
+                       offset=req.offset, description=req.description, force=req.force)
     return _out(e)
 
 
@@ -42,8 +54,6 @@ def create_expression(req: ExpressionCreate, request: Request) -> dict[str, Any]
 def delete_expression(name: str, request: Request) -> dict[str, Any]:
     """Remove a user expression."""
     if len(name) > 64:
-        from mimika.errors import ParameterError
-
         raise ParameterError("expression name is longer than 64 characters")
     st = state_of(request)
     with st.library_lock:

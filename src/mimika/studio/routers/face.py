@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, Request, Response
+from fastapi import APIRouter, Query, Request, Response
 
 import mimika
 from mimika.studio.routers._deps import state_of
@@ -36,16 +36,30 @@ def aus() -> dict[str, Any]:
                      "seed": a.seed} for a in AU_CATALOGUE.values()]}
 
 
+@router.get("/heads")
+def heads(request: Request) -> dict[str, Any]:
+    """Every head :func:`mimika.face.heads.list_heads` knows, whether it is installed here, and
+    the studio's default head."""
+    st = state_of(request)
+    return {"default": st.head_name,
+            "heads": [{"name": h.name, "rig": h.rig, "available": h.available,
+                       "description": h.description} for h in st.head_infos()]}
+
+
+HeadName = Query(None, max_length=200, description="a head from /api/heads (default: the "
+                 "studio's head)")
+
+
 @router.get("/head")
-def head(request: Request) -> dict[str, Any]:
-    """The loaded head: supported AUs by FACS group and the joint motions per AU."""
-    return state_of(request).head_info()
+def head(request: Request, name: str | None = HeadName) -> dict[str, Any]:
+    """A head: supported AUs by FACS group, the joint motions per AU and the face's frame."""
+    return state_of(request).head_info(name)
 
 
 @router.get("/head.glb")
-def head_glb(request: Request) -> Response:
+def head_glb(request: Request, name: str | None = HeadName) -> Response:
     """The head as binary glTF: one morph target per AU (+L/R), head and eye joints."""
-    data, etag = state_of(request).glb()
+    data, etag = state_of(request).glb(name)
     if request.headers.get("if-none-match") == etag:
         return Response(status_code=304, headers={"ETag": etag})
     return Response(data, media_type="model/gltf-binary",
@@ -58,3 +72,11 @@ def blend(req: BlendRequest) -> dict[str, Any]:
     from mimika.facs.blender import blend as run
 
     return run(req.aus, disabled=req.disabled).to_dict()
+
+
+@router.get("/blend/rules")
+def blend_rules() -> dict[str, Any]:
+    """Every AU Blender rule with a plain-language title and explanation (for the switches)."""
+    from mimika.studio.rules import rules_info
+
+    return {"rules": rules_info()}

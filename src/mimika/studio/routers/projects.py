@@ -14,19 +14,15 @@ from mimika.studio.routers._deps import state_of
 from mimika.studio.schemas import SampleRequest
 
 router = APIRouter(prefix="/api", tags=["projects"])
-HEADS = ("builtin", "ict")
 
 
-def _validate(doc: Any, name: str) -> Any:
-    from mimika.markup.project import ProjectError, project_from_dict
+def _validate(doc: Any, name: str, st: Any) -> Any:
+    """The project of ``doc`` as the studio can use it (see :mod:`mimika.studio.checks`)."""
+    from mimika.studio.checks import check_project
 
-    if not isinstance(doc, dict):
-        raise ParameterError("a project must be a JSON object")
-    proj = project_from_dict(doc, source=name)
-    if proj.settings.get("head") not in HEADS:
-        raise ProjectError(name, [f"settings.head: the studio works with {' or '.join(HEADS)}, "
-                                  f"not {proj.settings.get('head')!r}"])
-    return proj
+    with st.library_lock:
+        lib = st.library()
+    return check_project(doc, name, library=lib, heads=st.head_names())
 
 
 @router.get("/projects")
@@ -64,13 +60,30 @@ def put_project(name: str, request: Request,
     """Validate and save a project atomically (the old file survives any failure)."""
     from mimika.markup.project import project_to_dict, save_project
 
-    p = project_path(state_of(request).projects_dir, name)
-    proj = _validate(doc, name)
+    st = state_of(request)
+    p = project_path(st.projects_dir, name)
+    name = p.name[: -len(SUFFIX)]
+    proj = _validate(doc, name, st)
     try:
         save_project(proj, p)
     except OSError as e:
-        raise DataError(f"cannot save project {name!r}: {e.strerror or e}") from None
+        raise DataError(f"cannot save the project “{name}”: {e.strerror or e}") from None
     return {"saved": name, "project": project_to_dict(proj)}
+
+
+@router.post("/projects/check")
+def check_project_doc(request: Request, doc: Any = Body(...)) -> dict[str, Any]:  # noqa: B008
+    """Check a project document (e.g. a file opened in the page) without saving it: always
+    200, with ``ok``, the ``problems`` in plain words and the normalised ``project``."""
+    from mimika.markup.project import ProjectError, project_to_dict
+
+    try:
+        proj = _validate(doc, "project", state_of(request))
+    except ProjectError as e:
+        return {"ok": False, "problems": e.problems}
+    except ParameterError as e:
+        return {"ok": False, "problems": [str(e)]}
+    return {"ok": True, "problems": [], "project": project_to_dict(proj)}
 
 
 @router.delete("/projects/{name:path}")
@@ -85,16 +98,19 @@ def delete_project(name: str, request: Request) -> dict[str, Any]:
 
 
 @router.post("/timeline/sample")
-def sample_timeline(req: SampleRequest) -> dict[str, Any]:
+def sample_timeline(req: SampleRequest, request: Request) -> dict[str, Any]:
     """Sample a project's timeline (expressions, head, gaze, blinks) at ``fps``."""
     import numpy as np
 
+    from mimika.studio.speaking import mix_of
     from mimika.timeline import sample
 
-    proj = _validate(req.project, "project")
+    st = state_of(request)
+    proj = _validate(req.project, "project", st)
+    mix = mix_of(req.project, st)
     tl = proj.timeline
     dur = req.duration if req.duration is not None else max(tl.end, 0.04)
-    track = sample(tl, fps=req.fps, duration=min(dur, 600.0),
-                   blend=bool(proj.settings.get("blend")))
+    track = sample(tl, fps=req.fps, duration=min(dur, 600.0), blend=mix.blend,
+                   disabled=mix.disabled, library=mix.library)
     return {"fps": req.fps, "t0": 0.0, "duration": tl.end, "channels": list(track.channels),
             "values": np.round(track.values.astype(np.float64), 4).tolist()}

@@ -27,8 +27,10 @@ from fastapi import APIRouter, HTTPException, Request, Response, WebSocket, WebS
 from pydantic import ValidationError
 from starlette.concurrency import run_in_threadpool
 
-from mimika.errors import MimikaError
+from mimika import limits
+from mimika.errors import DataError, MimikaError
 from mimika.studio import speaking
+from mimika.studio.messages import plain
 from mimika.studio.routers._deps import state_of
 from mimika.studio.schemas import FramesRequest, SpeakRequest
 from mimika.studio.state import SpeechEntry, StudioState, speech_key
@@ -47,11 +49,10 @@ def _entry(st: StudioState, req: SpeakRequest) -> SpeechEntry:
     return entry
 
 
-def _payload(entry: SpeechEntry, timeline: Any, *, fps: float, blend: bool) -> dict[str, Any]:
+def _payload(entry: SpeechEntry, mix: speaking.Mix, *, fps: float) -> dict[str, Any]:
     return {"key": entry.key, "duration": round(entry.duration, 4),
             "audio": f"/api/speech/{entry.key}.wav",
-            "segments": [speaking.segment_frames(s, timeline, fps=fps, blend=blend)
-                         for s in entry.segments],
+            "segments": speaking.entry_frames(entry, mix, fps=fps),
             "sentences": [speaking.segment_info(s, i) for i, s in enumerate(entry.segments)]}
 
 
@@ -59,10 +60,10 @@ def _payload(entry: SpeechEntry, timeline: Any, *, fps: float, blend: bool) -> d
 def speak(req: SpeakRequest, request: Request) -> dict[str, Any]:
     """Synthesise ``text`` (cached) and return frames per sentence, subtitles and the audio URL."""
     st = state_of(request)
-    timeline = speaking.timeline_of(req.project)
+    mix = speaking.mix_of(req.project, st, blend=req.blend)
     t = time.perf_counter()
     entry = _entry(st, req)
-    out = _payload(entry, timeline, fps=req.fps, blend=req.blend)
+    out = _payload(entry, mix, fps=req.fps)
     out["server_ms"] = round((time.perf_counter() - t) * 1000, 1)
     return out
 
@@ -87,7 +88,8 @@ def speech_wav(key: str, request: Request) -> Response:
 def speech_frames(key: str, req: FramesRequest, request: Request) -> dict[str, Any]:
     """Frames of a cached speech re-mixed with the (edited) timeline."""
     entry = _cached(request, key)
-    return _payload(entry, speaking.timeline_of(req.project), fps=req.fps, blend=req.blend)
+    return _payload(entry, speaking.mix_of(req.project, state_of(request), blend=req.blend),
+                    fps=req.fps)
 
 
 # -- live ----------------------------------------------------------------------------------------
@@ -112,10 +114,15 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
         return round((time.perf_counter() - t_recv) * 1000, 1)
 
     try:
-        timeline = await run_in_threadpool(speaking.timeline_of, req.project)
+        mix = await run_in_threadpool(speaking.mix_of, req.project, st, blend=req.blend)
         sents = speaking.sentences(req.text)
     except MimikaError as e:
-        await send.json({"type": "error", "id": sid, "message": str(e)})
+        await send.json({"type": "error", "id": sid, "message": plain(str(e))})
+        return
+    except Exception as e:  # a bug: answer anyway, never leave the page waiting
+        log.exception("studio: live speech could not read the project")
+        await send.json({"type": "error", "id": sid,
+                         "message": f"internal error: {type(e).__name__}: {e}"})
         return
     key = speech_key(req.text, req.lang, req.rate)
     cached = st.get_speech(key)
@@ -138,7 +145,10 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
                               "server_ms": ms()}, speaking.pcm16(seg))
             if first_audio is None:
                 first_audio = ms()
-            frames = speaking.segment_frames(seg, timeline, fps=req.fps, blend=req.blend)
+            beh = await run_in_threadpool(speaking.segment_behaviour, entry.segments, i, mix,
+                                          fps=req.fps)
+            frames = await run_in_threadpool(speaking.segment_frames, seg, mix, fps=req.fps,
+                                             behaviour=beh)
             frames.update(id=sid, index=i)
             await send.json(frames)
             info = speaking.segment_info(seg, i)
@@ -146,7 +156,7 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
             await send.json(info)
             t0 += seg.duration
     except MimikaError as e:
-        await send.json({"type": "error", "id": sid, "message": str(e)})
+        await send.json({"type": "error", "id": sid, "message": plain(str(e))})
         return
     except Exception as e:  # a bug: tell the page instead of leaving it waiting
         log.exception("studio: live speech failed")
@@ -182,10 +192,11 @@ async def live(ws: WebSocket) -> None:
                                  f"{limit} bytes"})
                 continue
             try:
-                data = json.loads(text)
-                if not isinstance(data, dict):
-                    raise ValueError("not an object")
-            except ValueError:
+                data = limits.loads_json(text, "message")  # no NaN, huge integers, deep nests
+            except DataError as e:
+                await send.json({"type": "error", "message": str(e)})
+                continue
+            if not isinstance(data, dict):
                 await send.json({"type": "error", "message": "message is not a JSON object"})
                 continue
             kind = data.get("type")
@@ -201,9 +212,9 @@ async def live(ws: WebSocket) -> None:
                 try:
                     req = SpeakRequest.model_validate(body)
                 except ValidationError as e:
-                    err = "; ".join(f"{'.'.join(map(str, x['loc']))}: "
-                                    f"{str(x['msg']).removeprefix('Value error, ')}"
-                                    for x in e.errors()[:5])
+                    from mimika.studio.messages import validation_message
+
+                    err = validation_message(list(e.errors()))
                     await send.json({"type": "error", "id": sid, "message": err})
                     continue
                 if task is not None:

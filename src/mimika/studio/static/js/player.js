@@ -25,13 +25,35 @@ export class Player {
     this.ws.binaryType = "arraybuffer";
     this.wsReady = new Promise((res) => this.ws.addEventListener("open", res, { once: true }));
     this.ws.addEventListener("message", (m) => this.onMessage(m));
-    this.ws.addEventListener("close", () => setTimeout(() => this.connect(), 1000));
+    this.ws.addEventListener("close", () => {
+      if (this.mode === "live") { this.mode = "idle"; this.onState(this.mode); this.onError && this.onError("The connection to the studio server was lost; press Speak again."); }
+      setTimeout(() => this.connect(), 1000);
+    });
   }
 
   ctx() {
     if (!this.actx) this.actx = new AudioContext({ latencyHint: "interactive" });
     if (this.actx.state === "suspended") this.actx.resume();
     return this.actx;
+  }
+
+  // Forget the spoken text (it changed or was cleared): nothing old replays.
+  clearSpeech() {
+    if (this.mode === "live" || this.mode === "audio") this.stop();
+    this.id = this.nextId++;  // late messages of the old text are ignored
+    this.segments = []; this.sentences = []; this.duration = 0; this.key = null; this.done = false;
+    this.recording = null;
+    this.audio.removeAttribute("src");
+    this.audio.load();
+  }
+
+  // Speech that arrived whole (a recording aligned on the server): ready for Play.
+  loadSpeech(r, recording) {
+    this.clearSpeech();
+    this.key = r.key; this.segments = r.segments; this.sentences = r.sentences;
+    this.duration = r.duration; this.done = true; this.recording = recording;
+    this.audio.src = r.audio;
+    this.onSentence(this.sentences);
   }
 
   timelineEnd() { return this.tl ? (this.tl.values.length - 1) / this.tl.fps : 0; }
@@ -47,13 +69,15 @@ export class Player {
     this.mode = "live";
     this.onState(this.mode);
     if (this.ws.readyState !== WebSocket.OPEN) await this.wsReady;
+    if (this.mode !== "live") return;  // stopped while connecting
     this.ws.send(JSON.stringify({ type: "speak", id: this.id, text, lang, project, blend, fps }));
     this.metrics.sentMs = performance.now() - this.metrics.t_speak;
   }
 
   onMessage(m) {
     if (typeof m.data !== "string") return this.onAudio(m.data);
-    const msg = JSON.parse(m.data);
+    let msg;
+    try { msg = JSON.parse(m.data); } catch { return; }
     if (msg.id !== undefined && msg.id !== this.id) return;  // a cancelled request
     if (msg.type === "start") {
       this.metrics.startMsgMs = performance.now() - this.metrics.t_speak;
@@ -109,7 +133,7 @@ export class Player {
     if (this.key && remix) {
       const r = await remix(this.key);
       if (r) { this.segments = r.segments; this.sentences = r.sentences; this.duration = r.duration; }
-      else this.key = null;
+      else this.clearSpeech();  // expired on the server: never replay stale frames
     }
     if (from >= this.end() - 0.05) from = 0;  // at the end: replay from the start
     if (this.key) {
@@ -119,8 +143,9 @@ export class Player {
         try {
           await this.audio.play();
         } catch (e) {  // blocked or unplayable: animate without sound rather than freeze
+          if (this.mode !== "audio") return;  // stopped meanwhile (pause() aborts play())
           this.playError = `${e.name}: ${e.message}`;
-          this.onError && this.onError(`could not play the audio (${e.name}); playing silently`);
+          this.onError && this.onError("The browser would not play the sound, so the face moves silently.");
           this.mode = "free";
         }
       }

@@ -1,4 +1,4 @@
-// Small DOM helpers: element builder, toasts, debounce.
+// Small DOM helpers: element builder, toasts, a confirm dialog, debounce, FACS letters.
 
 export function el(tag, attrs = {}, ...children) {
   const e = document.createElement(tag);
@@ -17,20 +17,70 @@ export function el(tag, attrs = {}, ...children) {
   return e;
 }
 
-export function toast(message, kind = "error", ms = 7000) {
+// A toast in the lower right. ms = 0 keeps it until closed; action = {label, run}.
+export function toast(message, kind = "error", ms = 8000, action = null) {
+  (window.__mimikaToasts ||= []).push(String(message));  // read by the browser tests
   const box = document.getElementById("toasts");
-  const t = el("div", { class: `toast ${kind}`, role: kind === "error" ? "alert" : "status" }, message);
+  const t = el("div", { class: `toast ${kind}`, role: kind === "error" ? "alert" : "status" },
+    el("span", { class: "msg" }, message));
+  const close = () => t.remove();
+  if (action) t.append(el("button", { onclick: () => { close(); action.run(); } }, action.label));
+  if (!ms || kind === "error") t.append(el("button", { "aria-label": "Close this message", onclick: close }, "✕"));
   box.append(t);
-  setTimeout(() => t.remove(), ms);
+  if (ms) setTimeout(close, ms);
+  t.close = close;
   return t;
+}
+
+// A modal question; resolves true for OK.
+export function ask(text, ok = "OK", cancel = "Cancel") {
+  const d = document.getElementById("dialog");
+  document.getElementById("dialog-text").textContent = text;
+  document.getElementById("dialog-ok").textContent = ok;
+  document.getElementById("dialog-cancel").textContent = cancel;
+  return new Promise((resolve) => {
+    d.addEventListener("close", () => resolve(d.returnValue === "ok"), { once: true });
+    d.returnValue = "cancel";
+    d.showModal();
+    document.getElementById("dialog-ok").focus();
+  });
 }
 
 export function debounce(fn, ms) {
   let timer = null;
-  return (...args) => {
+  const f = (...args) => {
     clearTimeout(timer);
-    timer = setTimeout(() => fn(...args), ms);
+    timer = setTimeout(() => { timer = null; fn(...args); }, ms);
   };
+  f.pending = () => timer !== null;
+  f.flush = (...args) => { if (timer !== null) { clearTimeout(timer); timer = null; fn(...args); } };
+  return f;
 }
 
 export const fmt = (x, d = 2) => Number(x).toFixed(d);
+
+// FACS intensity letters: A trace … E maximum, at 0.2 … 1.0 (mimika.facs.parse_intensity)
+export const LETTERS = "ABCDE";
+export function letterOf(v) {
+  if (!(v > 0.05)) return "";
+  return LETTERS[Math.min(4, Math.max(0, Math.round(v * 5) - 1))];
+}
+
+// "0.6", ".6", "60%", "C", "c" → 0.6; null when it is not an intensity.
+export function parseIntensity(text) {
+  const s = String(text).trim();
+  if (s.length === 1 && LETTERS.includes(s.toUpperCase())) return 0.2 * (LETTERS.indexOf(s.toUpperCase()) + 1);
+  const pct = s.endsWith("%");
+  const v = Number((pct ? s.slice(0, -1) : s).replace(",", "."));
+  if (s === "" || !Number.isFinite(v)) return null;
+  const x = pct ? v / 100 : v;
+  return x >= 0 && x <= 1 ? x : null;
+}
+
+// True when a key press belongs to a text field (typing, not a studio shortcut).
+export function typing(target) {
+  if (!target || !target.tagName) return false;
+  if (target.isContentEditable || target.tagName === "TEXTAREA") return true;
+  if (target.tagName === "INPUT") return !["range", "checkbox", "radio", "button", "file"].includes(target.type);
+  return target.tagName === "SELECT";
+}

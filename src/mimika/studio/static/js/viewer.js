@@ -1,57 +1,54 @@
-// The three.js view: the head from mimika's glTF export (one morph target per AU, a head joint
-// and two eye nodes), lit like mimika's renders: warm key, cool fill, rim, studio backdrop.
+// The three.js view: a head from mimika's glTF export (a morph target per AU, a head joint and
+// two eye nodes, any textures the GLB carries), drawn in mimika's look (look.js), framed like
+// the renderer's cameras (render/camera.py: front, three-quarter, profile).
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { Look } from "./look.js";
 
-// Lights in camera space, as in mimika/render/renderer.py (linear colours).
-const KEY = { dir: [-0.55, 0.55, 0.62], col: [1.0, 0.93, 0.85], k: 2.6 };
-const FILL = { dir: [0.75, 0.05, 0.55], col: [0.30, 0.34, 0.40], k: 2.2 };
-const RIM = { dir: [0.45, 0.55, -0.7], col: [0.55, 0.55, 0.6], k: 1.6 };
-const SKY = [0.24, 0.26, 0.30], GROUND = [0.10, 0.085, 0.075];
+const DEG = Math.PI / 180;
 
 export class Viewer {
   constructor(canvas) {
     this.canvas = canvas;
     this.scene = new THREE.Scene();
-    this.camera = new THREE.PerspectiveCamera(22, 1, 0.01, 20);
+    this.camera = new THREE.PerspectiveCamera(20, 1, 0.01, 20);
     this.camera.position.set(0, 0, 1.2);
-    this.scene.add(this.camera);
     this.meshes = [];
     this.motion = { head_rot: {}, head_tr: {}, eye_rot: {} };
     this.scale = 0.01;
+    this.view = "front";
     this.ready = false;
-    this.webgl = true;
     try {
-      this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, alpha: true,
-                                                preserveDrawingBuffer: true });
+      this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, alpha: false, preserveDrawingBuffer: true });
       this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 1.5));
       this.renderer.outputColorSpace = THREE.SRGBColorSpace;
-      this.renderer.toneMapping = THREE.ACESFilmicToneMapping;
-      this.renderer.toneMappingExposure = 1.05;
+      this.renderer.toneMapping = THREE.NoToneMapping;  // the look applies the renderer's curve
       this.controls = new OrbitControls(this.camera, canvas);
       this.controls.enableDamping = true;
-      this.controls.minDistance = 0.25;
+      this.controls.minDistance = 0.2;
       this.controls.maxDistance = 3;
       this.controls.addEventListener("change", () => { this.dirty = true; });
     } catch (e) {
-      this.webgl = false;  // the scene (and its morph weights) still works without a canvas
-      this.renderer = null;
-      this.error = `WebGL is unavailable (${e.message}); the 3D view is off`;
+      this.renderer = null;  // the scene (and its morph weights) still works without a canvas
+      this.error = `The 3D view is off: this browser cannot use WebGL (${e.message}).`;
     }
-    const light = (L) => {
-      const c = new THREE.DirectionalLight(new THREE.Color(...L.col), L.k);
-      c.position.set(...L.dir);
-      c.target.position.set(0, 0, 0);
-      this.camera.add(c, c.target);
-      return c;
-    };
-    this.key = light(KEY); this.fill = light(FILL); this.rim = light(RIM);
-    this.scene.add(new THREE.HemisphereLight(new THREE.Color(...SKY).multiplyScalar(2.2),
-                                             new THREE.Color(...GROUND).multiplyScalar(2.2), 1.0));
+    canvas.addEventListener("keydown", (e) => this.onKey(e));
     this._resize = () => this.resize();
-    window.addEventListener("resize", this._resize);
+    new ResizeObserver(this._resize).observe(canvas.parentElement);
     this.resize();
+  }
+
+  setLookInfo(info) {
+    this.lookInfo = info;
+    this.look = new Look(info);
+    this.camera.fov = info.fov;
+  }
+
+  setLook(name) {
+    this.look.set(name);
+    this.setView(this.view);
+    this.dirty = true;
   }
 
   resize() {
@@ -63,31 +60,113 @@ export class Viewer {
     this.dirty = true;
   }
 
+  // Load a head's GLB (replacing the one shown); info is /api/head's answer.
   async load(url, info) {
+    const gltf = await new GLTFLoader().loadAsync(url);
+    this.unload();
     this.motion = info.motion;
     this.scale = info.scale;
-    const gltf = await new GLTFLoader().loadAsync(url);
+    this.frameInfo = info.frame;
     this.root = gltf.scene;
-    this.scene.add(this.root);
+    this.headJoint = this.eyeL = this.eyeR = null;
+    // a character's GLB says how AU values move its skeleton (io/gltf_skinned.py)
+    this.rig = (gltf.parser.json.extras || {}).rig || null;
+    this.joints = {};
     this.meshes = [];
+    const seen = new Set();
     this.root.traverse((o) => {
-      if (o.isMesh && o.morphTargetDictionary) this.meshes.push(o);
-      if (o.isMesh) o.frustumCulled = false;
+      if (o.isMesh) {
+        o.frustumCulled = false;
+        for (const m of Array.isArray(o.material) ? o.material : [o.material]) {
+          if (!seen.has(m)) { seen.add(m); this.look.adopt(m); }
+        }
+        if (o.morphTargetDictionary) this.meshes.push(o);
+      }
+      if (o.isBone || (this.rig && o.type === "Bone")) this.joints[o.name] = o;
       if (o.name === "head" && !this.headJoint) this.headJoint = o;
       if (o.name === "eye_L") this.eyeL = o;
       if (o.name === "eye_R") this.eyeR = o;
     });
+    this.scene.add(this.root);
     if (this.headJoint) this.headRest = this.headJoint.position.clone();
-    // frame the face: the skin's bounding box, camera slightly above, looking at the eyes
-    const box = new THREE.Box3().setFromObject(this.root);
-    const size = box.getSize(new THREE.Vector3()), c = box.getCenter(new THREE.Vector3());
-    const target = new THREE.Vector3(c.x, c.y + size.y * 0.08, c.z);
-    const dist = (size.y * 0.62) / Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2));
-    this.camera.position.set(target.x + dist * 0.12, target.y + size.y * 0.04, target.z + dist);
-    if (this.controls) { this.controls.target.copy(target); this.controls.update(); }
     this.ready = true;
-    this.apply({});
+    this.setView(this.view);
+    this.apply(this.frame || {});
   }
+
+  unload() {
+    if (!this.root) return;
+    this.scene.remove(this.root);
+    this.root.traverse((o) => {
+      if (!o.isMesh) return;
+      o.geometry.dispose();
+      for (const m of Array.isArray(o.material) ? o.material : [o.material]) {
+        for (const v of Object.values(m)) if (v && v.isTexture) v.dispose();
+        m.dispose();
+      }
+    });
+    this.root = null;
+  }
+
+  // A named camera (front | three-quarter | profile), framed as render/camera.py frames it.
+  setView(view) {
+    this.view = view;
+    const f = this.frameInfo;
+    if (!f) return;
+    const angle = (this.lookInfo.views[view] ?? 0) * DEG;
+    // heads with a body: the news look's head-and-shoulders shot (as the newsreader frames it)
+    const bust = f.body && this.look.bust_fill;
+    const fill = bust ? this.look.bust_fill : this.look.fill;
+    const visible = Math.max(f.height / fill, f.width / (0.85 * this.camera.aspect));
+    const dist = visible / 2 / Math.tan((this.camera.fov * DEG) / 2);
+    const c = new THREE.Vector3(...f.centre);
+    if (bust) c.y = f.eye_y - (0.5 - this.look.eye_line) * visible;
+    this.camera.position.set(c.x + dist * Math.sin(angle), c.y, c.z + dist * Math.cos(angle));
+    this.camera.up.set(0, 1, 0);
+    this.camera.lookAt(c);
+    if (this.controls) { this.controls.target.copy(c); this.controls.update(); }
+    this.dirty = true;
+  }
+
+  orbit(dAz, dEl) {
+    const t = this.controls ? this.controls.target : new THREE.Vector3();
+    const off = this.camera.position.clone().sub(t);
+    const s = new THREE.Spherical().setFromVector3(off);
+    s.theta += dAz;
+    s.phi = Math.min(Math.max(s.phi - dEl, 0.15), Math.PI - 0.15);
+    off.setFromSpherical(s);
+    this.camera.position.copy(t).add(off);
+    this.camera.lookAt(t);
+    if (this.controls) this.controls.update();
+    this.dirty = true;
+  }
+
+  zoom(f) {
+    const t = this.controls ? this.controls.target : new THREE.Vector3();
+    const off = this.camera.position.clone().sub(t);
+    const d = Math.min(Math.max(off.length() * f, 0.2), 3);
+    this.camera.position.copy(t).add(off.setLength(d));
+    if (this.controls) this.controls.update();
+    this.dirty = true;
+  }
+
+  onKey(e) {
+    if (e.ctrlKey || e.metaKey || e.altKey) return;
+    const step = (e.shiftKey ? 15 : 5) * DEG;
+    const keys = {
+      ArrowLeft: () => this.orbit(-step, 0), ArrowRight: () => this.orbit(step, 0),
+      ArrowUp: () => this.orbit(0, step), ArrowDown: () => this.orbit(0, -step),
+      "+": () => this.zoom(0.9), "=": () => this.zoom(0.9), "-": () => this.zoom(1.1),
+      1: () => this.onViewKey("front"), 2: () => this.onViewKey("three-quarter"),
+      3: () => this.onViewKey("profile"), 0: () => this.onViewKey(this.view),
+    };
+    const f = keys[e.key];
+    if (!f) return;
+    e.preventDefault();
+    f();
+  }
+
+  onViewKey(view) { (this.onViewChange || ((v) => this.setView(v)))(view); }
 
   // Set every morph weight and joint from {AU code: value}; unknown codes are ignored.
   apply(frame) {
@@ -108,10 +187,11 @@ export class Viewer {
         if (v) rv.add(new THREE.Vector3(...axis).multiplyScalar(v));
       }
       const a = rv.length();
-      return a > 1e-9 ? new THREE.Quaternion().setFromAxisAngle(rv.divideScalar(a), a)
-                      : new THREE.Quaternion();
+      return a > 1e-9 ? new THREE.Quaternion().setFromAxisAngle(rv.divideScalar(a), a) : new THREE.Quaternion();
     };
-    if (this.headJoint) {
+    if (this.rig) {
+      this.applyRig(frame);
+    } else if (this.headJoint) {
       this.headJoint.quaternion.copy(rot(this.motion.head_rot));
       const t = this.headRest.clone();
       for (const [code, vec] of Object.entries(this.motion.head_tr)) {
@@ -125,23 +205,75 @@ export class Viewer {
     if (this.eyeR) this.eyeR.quaternion.copy(eq);
   }
 
+  // A character: each joint turns by its rest pose + its share of the head AUs + the body
+  // channels (rotation vectors about world axes at bind, as the GLB's extras.rig says)
+  applyRig(frame) {
+    const r = this.rig;
+    const head = new THREE.Vector3();
+    for (const [code, axis] of Object.entries(r.head_rot)) {
+      const v = frame[code] || 0;
+      if (v) head.add(new THREE.Vector3(...axis).multiplyScalar(v));
+    }
+    for (const [name, joint] of Object.entries(this.joints)) {
+      const rv = new THREE.Vector3(...(r.rest[name] || [0, 0, 0]));
+      rv.addScaledVector(head, r.head_share[name] || 0);
+      for (const [chan, bones] of Object.entries(r.body)) {
+        const v = frame[chan] || 0;
+        if (v && bones[name]) rv.add(new THREE.Vector3(...bones[name]).multiplyScalar(v));
+      }
+      const a = rv.length();
+      joint.quaternion.copy(a > 1e-9 ? new THREE.Quaternion().setFromAxisAngle(rv.divideScalar(a), a)
+                                     : new THREE.Quaternion());
+      if (name === r.translate_joint) {
+        if (!joint.userData.rest) joint.userData.rest = joint.position.clone();
+        const t = joint.userData.rest.clone();
+        for (const [code, vec] of Object.entries(r.head_translate_m)) {
+          const v = frame[code] || 0;
+          if (v) t.add(new THREE.Vector3(...vec).multiplyScalar(v));
+        }
+        joint.position.copy(t);
+      }
+    }
+  }
+
   // {target name: largest influence over all meshes} — what the tests read
   weights() {
     const out = {};
     for (const m of this.meshes) {
-      for (const [name, i] of Object.entries(m.morphTargetDictionary)) {
-        out[name] = Math.max(out[name] || 0, m.morphTargetInfluences[i]);
-      }
+      for (const [name, i] of Object.entries(m.morphTargetDictionary)) out[name] = Math.max(out[name] || 0, m.morphTargetInfluences[i]);
     }
     return out;
   }
 
+  // A PNG data URL of the view framed like the renderer's w×h pictures (the camera the
+  // screen shows is kept); used to compare the look with mimika's renderer.
+  still(w, h) {
+    if (!this.renderer) return null;
+    const pos = this.camera.position.clone(), tgt = this.controls.target.clone(), aspect = this.camera.aspect;
+    const ratio = this.renderer.getPixelRatio();
+    this.renderer.setPixelRatio(1);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.setView(this.view);
+    this.look.render(this.renderer, this.scene, this.camera);
+    const url = this.canvas.toDataURL("image/png");
+    this.renderer.setPixelRatio(ratio);
+    this.camera.aspect = aspect;
+    this.camera.position.copy(pos);
+    this.controls.target.copy(tgt);
+    this.camera.lookAt(tgt);
+    this.resize();
+    this.render();
+    return url;
+  }
+
   // Draw only when something changed (software GL on a busy machine needs its CPU back).
   render() {
-    if (!this.renderer) return;
+    if (!this.renderer || !this.look) return;
     if (this.controls) this.controls.update();  // may fire "change" while damping
     if (!this.dirty) return;
     this.dirty = false;
-    this.renderer.render(this.scene, this.camera);
+    this.look.render(this.renderer, this.scene, this.camera);
   }
 }

