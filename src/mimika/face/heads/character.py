@@ -20,16 +20,12 @@ from mimika.face.makehuman import cache
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
 from mimika.face.makehuman.character_file import Character, load_character_spec
 from mimika.face.makehuman.paint import parts_of
-from mimika.face.makehuman.skeleton import rotation_matrix, skin
+from mimika.face.makehuman.skeleton import rest_pose, skin
 from mimika.face.rigs.blendshape import ShapeSet, load_table
 from mimika.face.rigs.skinned import SkinnedRig, Skinning
 
 log = logging.getLogger(__name__)
 
-#: where the lowered arms point (x away from the body, y down, z forward) in the rest pose
-ARM_DIRECTION = (0.14, -1.0, 0.06)
-#: elbow bend of the rest pose (rad, forearm forward)
-ELBOW_BEND = 0.35
 
 
 def arkit_to_table_name(name: str) -> str:
@@ -40,29 +36,6 @@ def arkit_to_table_name(name: str) -> str:
                                                  "mouthRight"):
             return name[: -len(word)] + side
     return name
-
-
-def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The rotation vector turning direction ``a`` onto ``b``."""
-    a = a / np.linalg.norm(a)
-    b = b / np.linalg.norm(b)
-    axis = np.cross(a, b)
-    s = float(np.linalg.norm(axis))
-    return axis / s * float(np.arctan2(s, a @ b)) if s > 1e-9 else np.zeros(3)
-
-
-def rest_pose(built: Built) -> dict[str, np.ndarray]:
-    """Arms lowered from the modelling A-pose to the sides, elbows slightly bent."""
-    sk = built.skeleton
-    pose: dict[str, np.ndarray] = {}
-    for side, sgn in (("L", 1.0), ("R", -1.0)):
-        i = sk.index(f"upperarm01.{side}")
-        want = np.array(ARM_DIRECTION) * [sgn, 1.0, 1.0]
-        rv = _rotation_between(sk.tails[i] - sk.heads[i], want)
-        pose[f"upperarm01.{side}"] = rv
-        # bend the forearm forward about the (rotated) elbow's x axis
-        pose[f"lowerarm01.{side}"] = rotation_matrix(rv) @ np.array([-ELBOW_BEND, 0.0, 0.0])
-    return pose
 
 
 def _to_head_frame(built: Built) -> tuple[float, np.ndarray]:
@@ -87,7 +60,7 @@ def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, S
     (default: one untextured part per material)."""
     scale, offset = _to_head_frame(built)
     sk = built.skeleton
-    pose = rest_pose(built)
+    pose = rest_pose(sk)
     tf_rest = sk.transforms(pose)
     bind_objs, posed_objs = [], []
     for p in built.pieces:

