@@ -102,9 +102,13 @@ def material(name: str) -> Material:
 _INCLUDE = re.compile(r'^#include "([\w.]+)"[ \t]*$', re.MULTILINE)
 
 
-def _shader(name: str) -> str:
-    """The source of ``shaders/name`` with its ``#include "file"`` lines expanded."""
+def _shader(name: str, *defines: str) -> str:
+    """The source of ``shaders/name`` with its ``#include "file"`` lines expanded and a
+    ``#define`` for each of ``defines`` after the ``#version`` line."""
     text = resources.files("mimika.render").joinpath(f"shaders/{name}").read_text("utf-8")
+    if defines:
+        head, _, rest = text.partition("\n")
+        text = head + "\n" + "".join(f"#define {d}\n" for d in defines) + rest
     return _INCLUDE.sub(lambda m: _shader(m.group(1)).rstrip("\n"), text)
 
 
@@ -198,9 +202,20 @@ class _GpuObject:
         if textured:
             self.uv_vbo = ctx.buffer(np.ascontiguousarray(obj.uvs, np.float32).tobytes())
             layout.append((self.uv_vbo, "2f", "in_uv"))
-        self.vao = ctx.vertex_array(prog, layout, self.ibo, 4)
+        # skip_errors: variants without textures have no in_uv attribute
+        self.vao = ctx.vertex_array(prog, layout, self.ibo, 4, skip_errors=True)
+        self._ctx, self._layout = ctx, layout
+        #: VAOs of the same buffers for the other variants of the mesh program
+        self._vaos: dict[int, Any] = {id(prog): self.vao}
         self.rest = obj.vertices
         self.holds_rest = False
+
+    def vao_for(self, prog: Any) -> Any:
+        """This object's vertex array for ``prog`` (a variant of the mesh program)."""
+        if id(prog) not in self._vaos:
+            self._vaos[id(prog)] = self._ctx.vertex_array(prog, self._layout, self.ibo, 4,
+                                                          skip_errors=True)
+        return self._vaos[id(prog)]
 
     def update(self, positions: np.ndarray | None) -> None:
         """Write ``positions`` (N, 3) and their normals; ``None`` means the rest pose."""
@@ -219,7 +234,7 @@ class _GpuObject:
         self.holds_rest = positions is self.rest
 
     def release(self) -> None:
-        for o in (self.vao, self.ibo, self.vbo, self.uv_vbo, *self.textures):
+        for o in (*self._vaos.values(), self.ibo, self.vbo, self.uv_vbo, *self.textures):
             if o is not None:
                 o.release()
 
@@ -234,7 +249,7 @@ def _upload_texture(ctx: Any, image: np.ndarray) -> Any:
     tex.build_mipmaps()
     tex.filter = (ctx.LINEAR_MIPMAP_LINEAR, ctx.LINEAR)
     # cards seen at a slant (lashes, brows, hair) keep their strands instead of blurring
-    tex.anisotropy = 8.0
+    # tex.anisotropy = 8.0
     return tex
 
 
@@ -249,7 +264,7 @@ def _winding_inward(vertices: np.ndarray, faces: np.ndarray) -> bool:
     return float(np.einsum("ij,ij->", fn, (a + b + c) / 3.0 - centre)) < 0.0
 
 
-_GL_KEYS = ("bg_vao", "prog", "bg_prog", "fbo", "resolve", "desk_vao", "desk_prog", "bg_fbo")
+_GL_KEYS = ("bg_vao", "bg_prog", "fbo", "resolve", "desk_vao", "desk_prog", "bg_fbo")
 
 
 class Renderer:
@@ -351,9 +366,11 @@ class Renderer:
             ctx.disable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
             self._backdrop(gl, ctx, fbo)
             ctx.enable(ctx.DEPTH_TEST)
-            prog = gl["prog"]
-            prog["u_view"].write(cam.view_matrix.T.astype("f4").tobytes())
-            prog["u_proj"].write(cam.projection_matrix.T.astype("f4").tobytes())
+            self._view = (cam.view_matrix.T.astype("f4").tobytes(),
+                          cam.projection_matrix.T.astype("f4").tobytes())
+            for p in gl["progs"].values():
+                p["u_view"].write(self._view[0])
+                p["u_proj"].write(self._view[1])
             glass, cut, fringe = [], [], []
             for o in self._objects:
                 for mat, first, count, tex, mode in o.parts:
@@ -372,24 +389,24 @@ class Renderer:
                     if skin is not None and skin.handles(o, first):
                         skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE, tex)
                         continue
-                    self._set_material(prog, mat, tex, _OPAQUE)
-                    o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+                    self._part(gl, o, mat, tex, _OPAQUE).render(ctx.TRIANGLES, vertices=count,
+                                                               first=first)
             ctx.disable(ctx.CULL_FACE)
             # cut-outs and the opaque core of blended parts (hair, lashes) write depth
             for o, mat, first, count, tex in cut:
-                self._set_material(prog, mat, tex, _MASK)
-                o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+                self._part(gl, o, mat, tex, _MASK).render(ctx.TRIANGLES, vertices=count,
+                                                         first=first)
             if glass or fringe:
                 ctx.enable(ctx.BLEND)
                 ctx.depth_mask = False
                 ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
                 for o, mat, first, count, tex in glass:
-                    self._set_material(prog, mat, tex, _OPAQUE)
-                    o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+                    self._part(gl, o, mat, tex, _OPAQUE).render(ctx.TRIANGLES, vertices=count,
+                                                               first=first)
                 # soft edges of blended parts over everything drawn so far (premultiplied)
                 for o, mat, first, count, tex in fringe:
-                    self._set_material(prog, mat, tex, _FRINGE)
-                    o.vao.render(ctx.TRIANGLES, vertices=count, first=first)
+                    self._part(gl, o, mat, tex, _FRINGE).render(ctx.TRIANGLES, vertices=count,
+                                                               first=first)
                 ctx.depth_mask = True
                 ctx.disable(ctx.BLEND)
             if "desk_vao" in gl:
@@ -452,7 +469,8 @@ class Renderer:
         if self._gl is not None:
             gl, self._gl = self._gl, None
             done: set[int] = set()
-            for obj in (*(gl.get(k) for k in _GL_KEYS), *gl["attachments"]):
+            for obj in (*(gl.get(k) for k in _GL_KEYS), *gl["progs"].values(),
+                        *gl["attachments"]):
                 if obj is not None and id(obj) not in done:
                     done.add(id(obj))
                     obj.release()
@@ -484,20 +502,52 @@ class Renderer:
 
     @staticmethod
     def _set_material(prog: Any, m: Material, tex: Any = None, mode: int = _OPAQUE) -> None:
-        prog["u_base"].value = m.color
-        prog["u_specular"].value = m.specular
-        prog["u_shininess"].value = m.shininess
-        prog["u_wrap"].value = m.wrap
-        prog["u_scatter"].value = m.scatter
-        prog["u_alpha"].value = m.alpha
-        prog["u_textured"].value = tex is not None
-        prog["u_alpha_mode"].value = mode
-        prog["u_model"].value = 1 if m.model == "hair" else 0
         # cut-outs and cards are seen from both sides: no darkening of their back faces
-        prog["u_backface"].value = BACKFACE if mode == _OPAQUE else 1.0
+        for name, value in (("u_base", m.color), ("u_specular", m.specular),
+                            ("u_shininess", m.shininess), ("u_wrap", m.wrap),
+                            ("u_scatter", m.scatter), ("u_alpha", m.alpha),
+                            ("u_alpha_mode", mode),
+                            ("u_backface", BACKFACE if mode == _OPAQUE else 1.0)):
+            if name in prog:  # a variant may have compiled a uniform away
+                prog[name].value = value
         if tex is not None:
             tex.use(location=0)
             prog["u_tex"].value = 0
+
+    def _program(self, gl: dict, textured: bool, cut: bool, hair: bool) -> Any:
+        """The mesh program variant: ``textured``, ``cut`` (texture alpha may discard),
+        ``hair`` (strand shading); compiled on first use with the lights set."""
+        key = ("TEXTURED",) * textured + ("CUTOUT",) * cut + ("HAIR",) * hair
+        progs = gl["progs"]
+        if key not in progs:
+            ctx = gl["ctx"]
+            p = ctx.program(vertex_shader=_shader("mesh.vert.glsl"),
+                            fragment_shader=_shader("mesh.frag.glsl", *key))
+            for name, value in (
+                ("u_key_dir", _unit(KEY_DIR)), ("u_key_col", KEY_COL),
+                ("u_fill_dir", _unit(FILL_DIR)), ("u_fill_col", FILL_COL),
+                ("u_rim_dir", _unit(RIM_DIR)), ("u_rim_col", RIM_COL),
+                ("u_sky", SKY), ("u_ground", GROUND), ("u_exposure", EXPOSURE),
+                ("u_backface", BACKFACE),
+            ):
+                p[name].value = value
+            if self.lighting is not None:
+                from mimika.render.skin import set_lights
+
+                set_lights(p, self.lighting)
+            if getattr(self, "_view", None) is not None:
+                p["u_view"].write(self._view[0])
+                p["u_proj"].write(self._view[1])
+            progs[key] = p
+        return progs[key]
+
+    def _part(self, gl: dict, o: _GpuObject, mat: Material, tex: Any, mode: int) -> Any:
+        """Set up the program for one part and return the object's vertex array for it."""
+        textured = tex is not None
+        prog = self._program(gl, textured, textured and mode != _OPAQUE,
+                             textured and mat.model == "hair")
+        self._set_material(prog, mat, tex, mode)
+        return o.vao_for(prog)
 
     def _setup(self) -> dict[str, Any]:
         if self._gl is not None:
@@ -514,28 +564,9 @@ class Renderer:
 
     def _create(self, ctx: Any) -> dict[str, Any]:
         gl: dict[str, Any] = {"ctx": ctx, "attachments": []}
-        prog = ctx.program(
-            vertex_shader=_shader("mesh.vert.glsl"), fragment_shader=_shader("mesh.frag.glsl")
-        )
-        gl["prog"] = prog
+        gl["progs"] = {}
+        prog = self._program(gl, False, False, False)
         lit = self.lighting
-        for name, value in (
-            ("u_key_dir", _unit(KEY_DIR)),
-            ("u_key_col", KEY_COL),
-            ("u_fill_dir", _unit(FILL_DIR)),
-            ("u_fill_col", FILL_COL),
-            ("u_rim_dir", _unit(RIM_DIR)),
-            ("u_rim_col", RIM_COL),
-            ("u_sky", SKY),
-            ("u_ground", GROUND),
-            ("u_exposure", EXPOSURE),
-            ("u_backface", BACKFACE),
-        ):
-            prog[name].value = value
-        if lit is not None:
-            from mimika.render.skin import set_lights
-
-            set_lights(prog, lit)
         studio = lit is not None and lit.backdrop == "studio"
         bg = ctx.program(
             vertex_shader=_shader("background.vert.glsl"),

@@ -3,12 +3,14 @@
 // rim light from behind, hemispheric ambient. Wrap diffuse with a scatter tint for skin,
 // normalised Blinn-Phong specular (key and fill). Linear lighting, sRGB output.
 // Kept cheap: it runs per pixel on llvmpipe (no pow in the sRGB encode, one pow per light).
+// Compiled in variants (llvmpipe pays for both sides of a branch on a uniform): CUTOUT for
+// parts whose texture alpha cuts them out (it may discard, which costs early depth tests),
+// HAIR for the strand shading model, TEXTURED for parts with a texture.
 in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
 
 uniform vec3 u_base;        // linear base colour
-uniform bool u_textured;    // base colour (sRGB) and alpha from u_tex instead
 uniform sampler2D u_tex;
 uniform int u_alpha_mode;   // 0 opaque, 1 cut at 0.5, 3 soft fringe below 0.5 (blended)
 uniform float u_specular;   // specular strength
@@ -17,7 +19,6 @@ uniform float u_wrap;       // wrap diffuse (0 = Lambert)
 uniform vec3 u_scatter;     // tint of light wrapped past the terminator (skin: reddish)
 uniform float u_alpha;      // < 1: glass-like, premultiplied (specular stays)
 uniform float u_backface;   // brightness of back faces (cavities seen from outside)
-uniform int u_model;        // 0 standard, 1 hair: Kajiya-Kay highlights, soft silhouettes
 uniform mat4 u_view;        // (shared with the vertex shader) world up for hair strands
 
 #include "lights.glsl"
@@ -44,6 +45,11 @@ vec3 tonemap(vec3 c) {
 }
 
 vec3 base;
+
+// sRGB to linear (Taylor's cubic fit, within 0.3 % of the exact curve; no pow on llvmpipe)
+vec3 srgb_decode(vec3 c) {
+    return c * (c * (c * 0.305306011 + 0.682171111) + 0.012522878);
+}
 
 vec3 diffuse(vec3 n, vec3 l) {
     float ndl = dot(n, l);
@@ -88,12 +94,14 @@ void main() {
     float gloss = 1.0;
     vec3 n = normalize(v_normal);
     vec3 v = normalize(-v_pos);
-    if (u_textured) {
+#ifdef TEXTURED
+    {
         vec4 t = texture(u_tex, v_uv);
-        base = pow(t.rgb, vec3(2.2));
+        base = srgb_decode(t.rgb);
         a = t.a;
         if (u_alpha_mode == 0) gloss = a;  // opaque parts: alpha is a gloss map
-        if (u_model == 1) {
+#ifdef HAIR
+        {
             // hair thins out toward its silhouette (strand ends seen edge-on); highlights
             // follow the strands (brighter strands shine more)
             a *= smoothstep(0.03, 0.45, abs(dot(n, v)));
@@ -101,25 +109,31 @@ void main() {
             float ratio = dot(t.rgb, vec3(0.3, 0.5, 0.2)) / max(dot(mean, vec3(0.3, 0.5, 0.2)), 0.02);
             strand_gloss = clamp(ratio, 0.2, 2.0);
         }
+#endif
+#ifdef CUTOUT
+        // only in the cut-out program: a shader that may discard loses early depth testing
+        // on llvmpipe, so opaque parts are drawn by a program without these lines
         if (u_alpha_mode == 1 && a < 0.5) discard;
         if (u_alpha_mode == 3 && (a >= 0.5 || a < 0.02)) discard;
+#endif
     }
+#endif
     float facing = 1.0;
     if (!gl_FrontFacing) {
         n = -n;
         facing = u_backface;
     }
-    vec3 sk, sf;
-    if (u_model == 1) {
-        vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);
-        vec3 t = up - dot(up, n) * n;
-        float defined = smoothstep(0.15, 0.5, length(t));
-        sk = mix(vec3(specular(n, v, u_key_dir)), hair_specular(n, v, u_key_dir, t), defined);
-        sf = mix(vec3(specular(n, v, u_fill_dir)), hair_specular(n, v, u_fill_dir, t), defined);
-    } else {
-        sk = vec3(specular(n, v, u_key_dir));
-        sf = vec3(specular(n, v, u_fill_dir));
-    }
+#ifdef HAIR
+    vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);
+    vec3 t = up - dot(up, n) * n;
+    float defined = smoothstep(0.15, 0.5, length(t));
+    vec3 sk = mix(vec3(specular(n, v, u_key_dir)), hair_specular(n, v, u_key_dir, t), defined);
+    vec3 sf = mix(vec3(specular(n, v, u_fill_dir)), hair_specular(n, v, u_fill_dir, t),
+                  defined);
+#else
+    vec3 sk = vec3(specular(n, v, u_key_dir));
+    vec3 sf = vec3(specular(n, v, u_fill_dir));
+#endif
     // key and fill: diffuse + specular; rim: diffuse only (it lights silhouettes)
     vec3 c = u_key_col * (diffuse(n, u_key_dir) * u_alpha + gloss * sk)
            + u_fill_col * (diffuse(n, u_fill_dir) * u_alpha + gloss * sf)

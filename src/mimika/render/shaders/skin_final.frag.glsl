@@ -65,7 +65,7 @@ void main() {
     vec3 base = u_base;
     if (u_textured) {
         vec4 a = texture(u_albedo, v_tex);
-        base = pow(a.rgb, vec3(2.2));
+        base = a.rgb * (a.rgb * (a.rgb * 0.305306011 + 0.682171111) + 0.012522878);  // sRGB
         spec *= a.a;
     }
     vec3 c = (base * irr + spec) * facing;
