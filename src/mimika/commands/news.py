@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import limit_options, progress_bar, size_arg
+from mimika.commands._util import add_head_arg, limit_options, progress_bar, size_arg
 from mimika.errors import DataError, ParameterError
 
 VIEWS = ("front", "three-quarter", "profile")
@@ -115,7 +115,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="read the bundled example bulletin instead of a file")
     p.add_argument("-o", "--output", help="output video (.mp4); subtitles go beside it (.srt)")
     p.add_argument("--lang", help="espeak language: en, de, pl … (default en)")
-    p.add_argument("--head", default="builtin", help="builtin (default) or ict")
+    add_head_arg(p)
     p.add_argument("--voice", help="espeak voice variant (f3, m2, klatt …)")
     p.add_argument("--audio", metavar="FILE",
                    help="a recording of the article (WAV, MP3 …, any voice): align the text "
