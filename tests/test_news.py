@@ -131,13 +131,12 @@ def test_au_csv_is_exported_with_one_row_per_frame(video):
 def test_lips_move_while_speaking_and_rest_in_pauses(video, spoken):
     import av
 
-    from mimika.face.heads import load_head
-    from mimika.newsreader.pipeline import FILL
-    from mimika.render.camera import frame_head
+    from mimika.face.heads import DEFAULT_HEAD, load_head
+    from mimika.newsreader.pipeline import news_camera
 
     _, utt, _ = spoken
-    head, _ = load_head("builtin")
-    cam = frame_head(head, "front", aspect=160 / 120, fill=FILL)
+    head, _ = load_head(DEFAULT_HEAD)
+    cam = news_camera(head, "front", 160 / 120)
     px = cam.project(np.array([head.anchors["mouth_corner_L"], head.anchors["mouth_corner_R"],
                                head.anchors["chin"]]), (160, 120))
     x0, x1 = int(px[:, 0].min()) - 2, int(px[:, 0].max()) + 3
