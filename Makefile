@@ -1,5 +1,5 @@
 # mimika — the two commands a user needs:
-#   make demo   installs everything, then runs the main job on the built-in head
+#   make demo   installs everything, then runs the main job on the default character
 #   make test   installs everything, then runs lint + the test suite
 VENV ?= .venv
 BIN := $(VENV)/bin

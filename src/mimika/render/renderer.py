@@ -148,9 +148,10 @@ def vertex_normals(
     return n
 
 
-#: alpha modes as the mesh shader's u_alpha_mode: opaque, mask (cut at 0.5), blend core (cut at
-#: 0.5, writes depth), blend fringe (only the soft edge below 0.5, blended, no depth write)
-_OPAQUE, _MASK, _CORE, _FRINGE = 0, 1, 2, 3
+#: alpha modes as the mesh shader's u_alpha_mode: opaque (texture alpha = gloss), a cut-out
+#: part (its depth pre-pass cut at alpha 0.5, then shaded where the depth test equals it),
+#: blend fringe (only the soft edge below 0.5, blended, no depth write)
+_OPAQUE, _CUT, _FRINGE = 0, 1, 3
 
 
 class _GpuObject:
@@ -372,7 +373,9 @@ class Renderer:
                 p["u_view"].write(self._view[0])
                 p["u_proj"].write(self._view[1])
             glass, cut, fringe = [], [], []
-            for o in self._objects:
+            # the skin (a head's first object) goes last of the opaque ones: where clothes and
+            # eyes cover it, it then fails the depth test before it is shaded
+            for o in self._objects[1:] + self._objects[:1]:
                 for mat, first, count, tex, mode in o.parts:
                     if mat.alpha < 1.0:
                         glass.append((o, mat, first, count, tex))
@@ -392,10 +395,20 @@ class Renderer:
                     self._part(gl, o, mat, tex, _OPAQUE).render(ctx.TRIANGLES, vertices=count,
                                                                first=first)
             ctx.disable(ctx.CULL_FACE)
-            # cut-outs and the opaque core of blended parts (hair, lashes) write depth
-            for o, mat, first, count, tex in cut:
-                self._part(gl, o, mat, tex, _MASK).render(ctx.TRIANGLES, vertices=count,
-                                                         first=first)
+            if cut:
+                # cut-outs and the opaque core of blended parts (hair, lashes): their depth
+                # first (a texture look-up each), then shaded once per pixel where they are in
+                # front — stacked hair cards would otherwise be lit layer after layer
+                fbo.color_mask = False, False, False, False
+                for o, mat, first, count, tex in cut:
+                    self._part(gl, o, mat, tex, _CUT, depth_only=True).render(
+                        ctx.TRIANGLES, vertices=count, first=first)
+                fbo.color_mask = True, True, True, True
+                ctx.depth_func = "=="
+                for o, mat, first, count, tex in cut:
+                    self._part(gl, o, mat, tex, _CUT).render(ctx.TRIANGLES, vertices=count,
+                                                            first=first)
+                ctx.depth_func = "<"
             if glass or fringe:
                 ctx.enable(ctx.BLEND)
                 ctx.depth_mask = False
@@ -514,10 +527,11 @@ class Renderer:
             tex.use(location=0)
             prog["u_tex"].value = 0
 
-    def _program(self, gl: dict, textured: bool, cut: bool, hair: bool) -> Any:
-        """The mesh program variant: ``textured``, ``cut`` (texture alpha may discard),
-        ``hair`` (strand shading); compiled on first use with the lights set."""
-        key = ("TEXTURED",) * textured + ("CUTOUT",) * cut + ("HAIR",) * hair
+    def _program(self, gl: dict, textured: bool, hair: bool, depth_only: bool = False) -> Any:
+        """The mesh program variant: ``textured``, ``hair`` (strand shading), ``depth_only``
+        (texture coverage only, for a depth pre-pass); compiled on first use with the lights
+        set."""
+        key = ("TEXTURED",) * textured + ("HAIR",) * hair + ("DEPTH_ONLY",) * depth_only
         progs = gl["progs"]
         if key not in progs:
             ctx = gl["ctx"]
@@ -530,7 +544,8 @@ class Renderer:
                 ("u_sky", SKY), ("u_ground", GROUND), ("u_exposure", EXPOSURE),
                 ("u_backface", BACKFACE),
             ):
-                p[name].value = value
+                if name in p:  # the depth-only variant has no lights
+                    p[name].value = value
             if self.lighting is not None:
                 from mimika.render.skin import set_lights
 
@@ -541,11 +556,12 @@ class Renderer:
             progs[key] = p
         return progs[key]
 
-    def _part(self, gl: dict, o: _GpuObject, mat: Material, tex: Any, mode: int) -> Any:
+    def _part(self, gl: dict, o: _GpuObject, mat: Material, tex: Any, mode: int,
+              depth_only: bool = False) -> Any:
         """Set up the program for one part and return the object's vertex array for it."""
         textured = tex is not None
-        prog = self._program(gl, textured, textured and mode != _OPAQUE,
-                             textured and mat.model == "hair")
+        prog = self._program(gl, textured, textured and mat.model == "hair",
+                             textured and depth_only)
         self._set_material(prog, mat, tex, mode)
         return o.vao_for(prog)
 
@@ -565,7 +581,7 @@ class Renderer:
     def _create(self, ctx: Any) -> dict[str, Any]:
         gl: dict[str, Any] = {"ctx": ctx, "attachments": []}
         gl["progs"] = {}
-        prog = self._program(gl, False, False, False)
+        prog = self._program(gl, False, False)
         lit = self.lighting
         studio = lit is not None and lit.backdrop == "studio"
         bg = ctx.program(

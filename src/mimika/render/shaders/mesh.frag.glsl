@@ -3,9 +3,9 @@
 // rim light from behind, hemispheric ambient. Wrap diffuse with a scatter tint for skin,
 // normalised Blinn-Phong specular (key and fill). Linear lighting, sRGB output.
 // Kept cheap: it runs per pixel on llvmpipe (no pow in the sRGB encode, one pow per light).
-// Compiled in variants (llvmpipe pays for both sides of a branch on a uniform): CUTOUT for
-// parts whose texture alpha cuts them out (it may discard, which costs early depth tests),
-// HAIR for the strand shading model, TEXTURED for parts with a texture.
+// Compiled in variants (llvmpipe pays for both sides of a branch on a uniform): TEXTURED for
+// parts with a texture, HAIR for the strand shading model, DEPTH_ONLY for the depth pre-pass
+// of cut-out parts (coverage only; they are then shaded once where the pre-pass left them).
 in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -110,13 +110,14 @@ void main() {
             strand_gloss = clamp(ratio, 0.2, 2.0);
         }
 #endif
-#ifdef CUTOUT
-        // only in the cut-out program: a shader that may discard loses early depth testing
-        // on llvmpipe, so opaque parts are drawn by a program without these lines
-        if (u_alpha_mode == 1 && a < 0.5) discard;
-        if (u_alpha_mode == 3 && (a >= 0.5 || a < 0.02)) discard;
-#endif
     }
+#endif
+#ifdef DEPTH_ONLY
+    // the depth pre-pass of cut-out parts, the only program that discards (a shader that
+    // may discard loses early depth testing on llvmpipe): coverage only, colour masked off
+    if (a < 0.5) discard;
+    f_color = vec4(0.0);
+    return;
 #endif
     float facing = 1.0;
     if (!gl_FrontFacing) {
@@ -140,7 +141,8 @@ void main() {
            + u_rim_col * diffuse(n, u_rim_dir) * u_alpha;
     vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha;
     c = (c + ambient) * facing;
-    if (u_alpha_mode == 3) {  // premultiplied soft edge
+    if (u_alpha_mode == 3) {  // premultiplied soft edge; the core (a >= 0.5) adds nothing
+        a = (a < 0.5 && a >= 0.02) ? a : 0.0;
         f_color = vec4(to_srgb(tonemap(c)) * a, a);
         return;
     }
