@@ -347,47 +347,63 @@ def timing_extras(track: AUTrack) -> dict[str, float | int]:
             "duration_s": round(last / track.fps, 6)}
 
 
-def _animation(b: _Builder, track: AUTrack, morph_nodes, eye_nodes, motion, head_t0) -> dict:
-    times = (np.arange(track.n_frames) / track.fps).astype(np.float32)
-    if len(times) == 1:
-        times = np.array([0.0, 1.0 / track.fps], np.float32)
-        vals = np.repeat(track.values, 2, axis=0)
-    else:
+class _Animation:
+    """Samplers and channels of one glTF animation over a track's frame times (a single
+    frame becomes two keys: players need an interval), morph weights included."""
+
+    def __init__(self, b: _Builder, track: AUTrack, morph_nodes) -> None:
+        times = (np.arange(track.n_frames) / track.fps).astype(np.float32)
         vals = track.values
-    col = {c: vals[:, j] for j, c in enumerate(track.channels)}
-    zero = np.zeros(len(times), np.float32)
-    t_acc = b.add(times, "SCALAR", _FLOAT, minmax=True)
-    samplers: list[dict] = []
-    channels: list[dict] = []
+        if len(times) == 1:
+            times = np.array([0.0, 1.0 / track.fps], np.float32)
+            vals = np.repeat(vals, 2, axis=0)
+        self.n = len(times)
+        self._col = {c: vals[:, j].astype(np.float64) for j, c in enumerate(track.channels)}
+        self._zero = np.zeros(self.n)
+        self._b, self._t = b, b.add(times, "SCALAR", _FLOAT, minmax=True)
+        self.samplers: list[dict] = []
+        self.channels: list[dict] = []
+        for node, names in morph_nodes:
+            self.add(node, "weights", np.stack([self[n] for n in names], axis=1).reshape(-1),
+                     "SCALAR")
 
-    def add(node: int, path: str, data: np.ndarray, kind: str) -> None:
-        samplers.append({"input": t_acc, "output": b.add(data.astype(np.float32), kind, _FLOAT),
-                         "interpolation": "LINEAR"})
-        channels.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": path}})
+    def __getitem__(self, channel: str) -> np.ndarray:
+        """The channel's values per key (zeros for a channel the track lacks)."""
+        return self._col.get(channel, self._zero)
 
-    for node, names in morph_nodes:
-        w = np.stack([col.get(n, zero) for n in names], axis=1)
-        add(node, "weights", w.reshape(-1), "SCALAR")
-    eye_rv = np.zeros((len(times), 3))
-    for c, rv in motion["eye_rot"].items():
-        eye_rv += col.get(c, zero)[:, None] * rv[None, :]
+    def weighted(self, vectors: dict[str, np.ndarray]) -> np.ndarray:
+        """Σ channel value × vector over ``vectors`` ({channel: (3,)}), shape (keys, 3)."""
+        out = np.zeros((self.n, 3))
+        for c, vec in vectors.items():
+            out += self[c][:, None] * np.asarray(vec)[None, :]
+        return out
+
+    def add(self, node: int, path: str, data: np.ndarray, kind: str) -> None:
+        self.samplers.append({"input": self._t, "interpolation": "LINEAR",
+                              "output": self._b.add(data.astype(np.float32), kind, _FLOAT)})
+        self.channels.append({"sampler": len(self.samplers) - 1,
+                              "target": {"node": node, "path": path}})
+
+    def doc(self) -> dict:
+        return {"name": "mimika", "samplers": self.samplers, "channels": self.channels}
+
+
+def _animation(b: _Builder, track: AUTrack, morph_nodes, eye_nodes, motion, head_t0) -> dict:
+    anim = _Animation(b, track, morph_nodes)
+    eye_rv = anim.weighted(motion["eye_rot"])
     for node, _ in eye_nodes:
-        add(node, "rotation", _quat(eye_rv), "VEC4")
-    head_rv = np.zeros((len(times), 3))
-    head_tr = np.zeros((len(times), 3))
-    for c, rv in motion["head_rot"].items():
-        head_rv += col.get(c, zero)[:, None] * rv[None, :]
-    for c, tr in motion["head_tr"].items():
-        head_tr += col.get(c, zero)[:, None] * tr[None, :]
-    add(1, "rotation", _quat(head_rv), "VEC4")
-    add(1, "translation", head_t0[None, :] + head_tr * SCALE, "VEC3")
+        anim.add(node, "rotation", _quat(eye_rv), "VEC4")
+    head_rv = anim.weighted(motion["head_rot"])
+    head_tr = anim.weighted(motion["head_tr"])
+    anim.add(1, "rotation", _quat(head_rv), "VEC4")
+    anim.add(1, "translation", head_t0[None, :] + head_tr * SCALE, "VEC3")
     used = set(motion["head_rot"]) | set(motion["head_tr"]) | set(motion["eye_rot"]) | {
         n for _, names in morph_nodes for n in names}
     skipped = [c for c in track.channels if c not in used]
     if skipped:
         log.warning("glTF: the head does not model %s; those channels are not animated",
                     ", ".join(skipped))
-    return {"name": "mimika", "samplers": samplers, "channels": channels}
+    return anim.doc()
 
 
 def write_gltf(path: str | os.PathLike, rig: Rig, track: AUTrack | None = None) -> Path:

@@ -35,6 +35,7 @@ from mimika.io.gltf import (
     _UINT,
     _USHORT,
     SCALE,
+    _Animation,
     _Builder,
     _materials,
     _normals,
@@ -263,44 +264,21 @@ def _top4(w: Any) -> tuple[np.ndarray, np.ndarray]:
 
 def _animation(b: _Builder, rig: Any, track: AUTrack, morph_nodes, eye_nodes) -> dict:
     sk = rig.skinning
-    times = (np.arange(track.n_frames) / track.fps).astype(np.float32)
-    vals = track.values
-    if len(times) == 1:
-        times = np.array([0.0, 1.0 / track.fps], np.float32)
-        vals = np.repeat(vals, 2, axis=0)
-    col = {c: vals[:, j].astype(np.float64) for j, c in enumerate(track.channels)}
-    zero = np.zeros(len(times))
-    t_acc = b.add(times, "SCALAR", _FLOAT, minmax=True)
-    samplers: list[dict] = []
-    channels: list[dict] = []
-
-    def add(node: int, path: str, data: np.ndarray, kind: str) -> None:
-        samplers.append({"input": t_acc, "output": b.add(data.astype(np.float32), kind, _FLOAT),
-                         "interpolation": "LINEAR"})
-        channels.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": path}})
-
-    for node, names in morph_nodes:
-        w = np.stack([col.get(n, zero) for n in names], axis=1)
-        add(node, "weights", w.reshape(-1), "SCALAR")
-    eye_rv, head_rv, head_tr = np.zeros((len(times), 3)), np.zeros((len(times), 3)), \
-        np.zeros((len(times), 3))
-    for c, rv in rig._eye_rot.items():
-        eye_rv += col.get(c, zero)[:, None] * rv[None]
-    for c, rv in rig._head_rot.items():
-        head_rv += col.get(c, zero)[:, None] * rv[None]
-    for c, tr in rig._head_tr.items():
-        head_tr += col.get(c, zero)[:, None] * tr[None]
+    anim = _Animation(b, track, morph_nodes)
+    eye_rv = anim.weighted(rig._eye_rot)
+    head_rv = anim.weighted(rig._head_rot)
+    head_tr = anim.weighted(rig._head_tr)
     for node, _ in eye_nodes:
-        add(node, "rotation", _quat(eye_rv), "VEC4")
-    body = np.stack([col.get(c, zero) for c in rig.body_channels], 1) if rig.body_channels \
-        else np.zeros((len(times), 0))
+        anim.add(node, "rotation", _quat(eye_rv), "VEC4")
+    body = np.stack([anim[c] for c in rig.body_channels], 1) if rig.body_channels \
+        else np.zeros((anim.n, 0))
     local = rig.local_rotations(head_rv, body)  # (T, B, 3)
     for i in range(len(sk.names)):
         if np.ptp(local[:, i], axis=0).max() > 1e-7:
-            add(i, "rotation", _quat(local[:, i]), "VEC4")
+            anim.add(i, "rotation", _quat(local[:, i]), "VEC4")
     if np.any(head_tr):
         i = sk.names.index(sk.translate_bone)
         p = sk.parents[i]
         t0 = (np.asarray(sk.heads[i]) - np.asarray(sk.heads[p])) * SCALE
-        add(i, "translation", t0[None] + head_tr * SCALE, "VEC3")
-    return {"name": "mimika", "samplers": samplers, "channels": channels}
+        anim.add(i, "translation", t0[None] + head_tr * SCALE, "VEC3")
+    return anim.doc()
