@@ -200,25 +200,15 @@ def test_deform_batch_matches_deform_with_body_and_head_channels(character):
 
 def _ray_hits(orig, dirs, verts, faces, reach):
     """Which rays (orig + t·dir, 0 < t < reach) hit the triangle mesh."""
+    from mimika.face.makehuman.build import _first_hit
+
     tri = verts[faces]
     kd = cKDTree(tri.mean(1))
     out = np.zeros(len(orig), bool)
     for k in range(len(orig)):
         c = kd.query_ball_point(orig[k], reach + 1.0)
-        if not c:
-            continue
-        a, b, cc = tri[c, 0], tri[c, 1], tri[c, 2]
-        e1, e2 = b - a, cc - a
-        p = np.cross(dirs[k], e2)
-        det = (e1 * p).sum(1)
-        ok = np.abs(det) > 1e-12
-        inv = np.where(ok, 1 / np.where(ok, det, 1), 0)
-        s = orig[k] - a
-        u = (s * p).sum(1) * inv
-        q = np.cross(s, e1)
-        v = (q @ dirs[k]) * inv
-        t = (e2 * q).sum(1) * inv
-        out[k] = bool(np.any(ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0) & (t < reach)))
+        out[k] = bool(c) and np.isfinite(_first_hit(orig[k:k + 1], dirs[k:k + 1], tri[c],
+                                                    reach)[0])
     return out
 
 
