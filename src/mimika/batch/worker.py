@@ -74,8 +74,10 @@ def _png_bytes(img: np.ndarray) -> bytes:
 def _clip_frames(rig: Any, renderer: Any, item: Mapping[str, Any],
                  settings: Mapping[str, Any]) -> list[np.ndarray]:
     """Onset–apex–offset frames of ``item``'s requested AUs (blended per frame)."""
+    from mimika.plugins import load_plugins
     from mimika.timeline import Event, sample, timeline_from_events
 
+    load_plugins()  # a worker process starts without the CLI's plug-ins (ease "learned")
     a = settings["animation"]
     dur = a["onset"] + a["apex"] + a["offset"]
     ev = Event(kind="aus", start=0.0, duration=dur, aus=tuple(item["requested"].items()),
