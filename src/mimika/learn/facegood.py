@@ -4,7 +4,8 @@
 float [T, 116] weights of FACEGOOD's own rig at 30 fps (names in ``doc/bsname.txt``) and the
 upstream mapping to ARKit-52 (``doc/facegood116_to_arkit52.csv``: ``arkit, facegood_expr,
 status``; an expression is one rig channel or ``max(a, b, …)``). Only rows marked ``valid`` are
-used (27 mouth and jaw shapes); the ARKit frames then take the same path as a Live Link take
+used (27 mouth and jaw shapes; see :func:`column_names` for which column is which channel);
+the ARKit frames then take the same path as a Live Link take
 (:func:`mimika.io.arkit.arkit_to_aus`, folded onto :data:`~mimika.learn.data.MODEL_CHANNELS`).
 :func:`covered_channels` names the model channels fed only by valid shapes (13 of 20: no
 brows, lids or cheeks) — evaluations on this person use those channels only.
@@ -24,7 +25,7 @@ import numpy as np
 from mimika.errors import DataError
 from mimika.learn.data import MODEL_CHANNELS, Take, fold_channels
 
-__all__ = ["covered_channels", "load_facegood", "read_mapping"]
+__all__ = ["column_names", "covered_channels", "load_facegood", "read_mapping"]
 
 FPS = 30.0
 
@@ -79,6 +80,30 @@ def covered_channels(folder: str) -> tuple[str, ...]:
                  if folded[ok, k].max() > 0 and folded[bad, k].max() == 0)
 
 
+def _pair(a: str, b: str) -> bool:
+    """``x_l``/``x_r`` (or ``_dl``/``_dr``, ``_ul``/``_ur``): one shape's two halves."""
+    return a[:-1] == b[:-1] and a[-2:-1] in ("_", "d", "u") and (a[-1], b[-1]) == ("l", "r")
+
+
+def column_names(names: list[str], weights: np.ndarray) -> list[str]:
+    """The rig channel of each weight column. In the FACEGOOD export the columns are
+    ``doc/bsname.txt`` shifted by one (column i holds name i − 1): the animation is symmetric,
+    so a shape's left and right columns are identical, and only with that shift do the 11
+    identical neighbouring columns line up as ``_l``/``_r`` pairs. The shift (0 or 1) is
+    chosen by that test; a tie raises :class:`DataError`."""
+    w = np.asarray(weights)
+    same = [i for i in range(w.shape[1] - 1)
+            if w[:, i].max() > 1e-3 and np.allclose(w[:, i], w[:, i + 1], atol=1e-6)]
+    score = {}
+    for shift in (0, 1):
+        cand = names[-shift:] + names[:-shift] if shift else list(names)
+        score[shift] = sum(_pair(cand[i], cand[i + 1]) for i in same)
+    best = max(score, key=score.__getitem__)
+    if score[best] == score[1 - best]:
+        raise DataError(f"cannot tell which rig channel each FACEGOOD column is ({score})")
+    return names[-best:] + names[:-best] if best else list(names)
+
+
 def load_facegood(folder: str | os.PathLike) -> list[Take]:
     """Every ``bs_value/*.npy`` take as a :class:`~mimika.learn.data.Take` over
     :data:`MODEL_CHANNELS` (channels outside :func:`covered_channels` are 0), sorted by name."""
@@ -89,15 +114,18 @@ def load_facegood(folder: str | os.PathLike) -> list[Take]:
     files = sorted((folder / "bs_value").glob("*.npy"))
     if not files:
         raise DataError(f"{folder}/bs_value: no *.npy takes")
-    col = {n: i for i, n in enumerate(names)}
     keep = np.isin(MODEL_CHANNELS, covered_channels(str(folder)))
-    takes = []
+    weights = []
     for f in files:
         with warnings.catch_warnings():  # the files carry a Python-2 header; numpy warns
             warnings.simplefilter("ignore", UserWarning)
             w = np.asarray(np.load(f), np.float64)
         if w.ndim != 2 or w.shape[1] != len(names):
             raise DataError(f"{f}: expected [T, {len(names)}] rig weights, got {w.shape}")
+        weights.append(w)
+    col = {n: i for i, n in enumerate(column_names(names, np.concatenate(weights)))}
+    takes = []
+    for f, w in zip(files, weights, strict=True):
         shapes = np.zeros((len(w), len(ARKIT_52)))
         for s, src in valid.items():
             shapes[:, ARKIT_52.index(s)] = w[:, [col[n] for n in src]].max(1)
