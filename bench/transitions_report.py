@@ -9,9 +9,10 @@ Link takes, test on FACEGOOD's second person, on the 13 channels its rig maps to
 interpolation baselines and the learned models (``--models``: timing, seed, rtn), with
 bootstrap intervals, per transition size; markdown tables on stdout, plots in docs/img/,
 ``results.json`` in ``--out``. Each method's results are cached in ``--out``; ``--reuse``
-loads them instead of retraining. ``--ship`` trains the timing model on all five takes and
-writes it, with the leave-one-take-out validation record the ``learned`` easing reads, to
-src/mimika/learn/data/transitions.pt.
+loads them instead of retraining. ``--ship`` trains the timing model on all five takes (and,
+with ``--models …,seed``, seed 000's LSTM on four, early-stopping on the fifth) and writes it,
+with the leave-one-take-out validation record the ``learned`` easing reads, to
+src/mimika/learn/data/transitions.pt (transitions_seed.pt).
 """
 
 from __future__ import annotations
@@ -52,7 +53,8 @@ from mimika.learn.train import RECIPES, load_state, save_checkpoint, segment_spl
 
 IMG = ROOT / "docs" / "img"
 BASELINES = ("linear", "cosine", "hermite")
-SHIP = ROOT / "src/mimika/learn/data/transitions.pt"
+SHIP = {"timing": ROOT / "src/mimika/learn/data/transitions.pt",
+        "seed": ROOT / "src/mimika/learn/data/transitions_seed.pt"}
 
 
 def cached(out: Path, key: str, reuse: bool, make):
@@ -155,23 +157,28 @@ def main() -> None:
             print(table(results["lopo"][name], f"second person, {name} transitions"))
         print(timing_table(results["lopo"]["all"]))
     (out / "results.json").write_text(json.dumps(results, indent=1, default=float))
-    if "timing" in models:
-        record = validation_record(loto, "timing", source=(
+    for m in models:
+        record = validation_record(loto, m, source=(
             f"leave-one-take-out over {len(takes)} Live Link Face takes"))
-        print(json.dumps(record, indent=1))
-        if a.ship:
-            ship(takes, record)
+        print(m, json.dumps([{k: b.get(k) for k in ("name", "n", "rel", "use_model")}
+                             for b in record["bins"]]))
+        if a.ship and m in SHIP:
+            ship(takes, m, record)
     plots(takes, loto, results, models)
     print(f"\ntotal {time.perf_counter() - t0:.0f} s")
 
 
-def ship(takes, record) -> None:
-    data = segment_split(takes, Split(tuple(sorted(takes)), (), ()))
-    ck = train(data, RECIPES["timing"])
+def ship(takes, model: str, record) -> None:
+    """Train ``model`` on every take (the seed LSTM early-stops on the last one) and write it
+    with its leave-one-take-out validation record; the LSTM as float16 (half the size)."""
+    names = tuple(sorted(takes))
+    split = Split(names, (), ()) if model == "timing" else Split(names[:-1], names[-1:], ())
+    ck = train(segment_split(takes, split), RECIPES[model])
     ck["validation"] = record
-    save_checkpoint(ck, SHIP)
-    print(f"shipped {SHIP} ({SHIP.stat().st_size / 1e3:.0f} kB, {ck['n_params']} parameters, "
-          f"{ck['train_seconds']:.1f} s)", flush=True)
+    save_checkpoint(ck, SHIP[model], half=model != "timing")
+    print(f"shipped {SHIP[model]} ({SHIP[model].stat().st_size / 1e3:.0f} kB, "
+          f"{ck['n_params']} parameters, {ck['train_seconds']:.1f} s, best epoch "
+          f"{ck['best_epoch']} of {len(ck['history'])})", flush=True)
 
 
 def plots(takes, loto, results, models) -> None:
