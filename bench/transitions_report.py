@@ -41,6 +41,7 @@ from mimika.learn.protocol import (
     SIZE_BINS,
     Baseline,
     Learned,
+    concat,
     leave_one_person_out,
     leave_one_take_out,
     mask_take,
@@ -101,6 +102,16 @@ def timing_table(s: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def learned(model: str) -> Learned:
+    """A learned method with its recipe; the LSTMs early-stop on an inner validation take."""
+    def show(epoch, total, rec):
+        print(f"    {model} epoch {epoch}/{total} train {rec['train']:.5f} val {rec['val']:.5f} "
+              f"{rec['time']:.0f} s", flush=True)
+
+    return Learned(model, RECIPES[model], inner_val=model != "timing",
+                   progress=show if model != "timing" else None)
+
+
 def load_pool(motion: str, facegood: str | None):
     takes = {p.stem: load_take(p, fills=FILLS) for p in list_takes(motion)}
     fg = {f"facegood/{t.name}": t for t in load_facegood(facegood)} if facegood else {}
@@ -127,9 +138,10 @@ def main() -> None:
     folds = leave_one_take_out(list(takes))
     loto = cached(out, "loto_baselines", a.reuse, lambda: run_protocol(
         takes, folds, [Baseline(b) for b in BASELINES]))
-    for m in models:
-        loto = merge_methods(loto, cached(out, f"loto_{m}", a.reuse, lambda m=m: run_protocol(
-            takes, folds, [Learned(m, RECIPES[m], inner_val=m != "timing")])))
+    for m in models:  # one cache file per fold: long trainings can be resumed
+        loto = merge_methods(loto, concat([cached(
+            out, f"loto_{m}_{f.test[0]}", a.reuse,
+            lambda m=m, f=f: run_protocol(takes, [f], [learned(m)])) for f in folds]))
     results = {"loto": {"all": summarise(loto)}}
     print(f"\n## Leave-one-take-out ({len(folds)} folds)\n")
     print(table(results["loto"]["all"], "all held-out takes"))
@@ -148,7 +160,7 @@ def main() -> None:
             pool, fold, [Baseline(b) for b in BASELINES]))
         for m in models:
             lopo = merge_methods(lopo, cached(out, f"lopo_{m}", a.reuse, lambda m=m: run_protocol(
-                pool, fold, [Learned(m, RECIPES[m], inner_val=m != "timing")])))
+                pool, fold, [learned(m)])))
         results["lopo"] = {"all": summarise(lopo)}
         print(f"\n## Leave-one-person-out (FACEGOOD, channels {' '.join(ch)})\n")
         print(table(results["lopo"]["all"], "second person"))
@@ -173,7 +185,8 @@ def ship(takes, model: str, record) -> None:
     with its leave-one-take-out validation record; the LSTM as float16 (half the size)."""
     names = tuple(sorted(takes))
     split = Split(names, (), ()) if model == "timing" else Split(names[:-1], names[-1:], ())
-    ck = train(segment_split(takes, split), RECIPES[model])
+    ck = train(segment_split(takes, split), RECIPES[model],
+               progress=learned(model).progress)
     ck["validation"] = record
     save_checkpoint(ck, SHIP[model], half=model != "timing")
     print(f"shipped {SHIP[model]} ({SHIP[model].stat().st_size / 1e3:.0f} kB, "

@@ -32,7 +32,8 @@ from mimika.learn.transition_timing import GROUPS
 log = logging.getLogger(__name__)
 
 __all__ = ["SIZE_BINS", "Baseline", "Fold", "Learned", "Results", "bootstrap",
-           "leave_one_person_out", "leave_one_take_out", "mask_take", "merge_methods",
+           "concat", "leave_one_person_out", "leave_one_take_out", "mask_take",
+           "merge_methods",
            "run_protocol",
            "score_items", "summarise", "validation_record"]
 
@@ -110,6 +111,7 @@ class Learned:
     inner_val: bool = True
     batched: bool = True
     checkpoints: dict[str, dict] = field(default_factory=dict)
+    progress: Callable[[int, int, dict], None] | None = None
 
     def fit(self, data: Any) -> Generator:
         from mimika.learn.train import load_state, train
@@ -117,7 +119,7 @@ class Learned:
         if not self.inner_val:
             s = data.split
             data = replace(data, split=Split(s.train + s.val, (), s.test))
-        ck = train(data, self.config)
+        ck = train(data, self.config, progress=self.progress)
         self.checkpoints[str(data.split.test)] = ck
         return model_generator(load_state(ck))
 
@@ -297,6 +299,25 @@ def merge_methods(a: Results, b: Results) -> Results:
                    consp=np.concatenate([a.consp, b.consp]),
                    onset=np.concatenate([a.onset, b.onset[1:]]),
                    peak=np.concatenate([a.peak, b.peak[1:]]), windows=win)
+
+
+def concat(parts: Sequence[Results]) -> Results:
+    """The transitions (and windows) of several runs of the same methods, one after another
+    (e.g. one run per fold, cached separately)."""
+    first = parts[0]
+    if any(p.methods != first.methods for p in parts):
+        raise ValueError("results of different methods cannot be concatenated")
+
+    def cat(name: str, axis: int = 0) -> np.ndarray:
+        return np.concatenate([getattr(p, name) for p in parts], axis=axis)
+
+    win = {L: (np.concatenate([p.windows[L][0] for p in parts]),
+               np.concatenate([p.windows[L][1] for p in parts], axis=1))
+           for L in first.windows if all(L in p.windows for p in parts)}
+    return replace(first, fold=cat("fold"), take=cat("take"), length=cat("length"),
+                   size=cat("size"), count=cat("count"), gt_jump=cat("gt_jump"),
+                   se=cat("se", 1), l2=cat("l2", 1), jump=cat("jump", 1), consp=cat("consp", 1),
+                   onset=cat("onset", 1), peak=cat("peak", 1), windows=win)
 
 
 def bootstrap(stat: Callable[[np.ndarray], float], strata: np.ndarray, *, n: int = 2000,
