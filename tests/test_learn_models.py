@@ -97,7 +97,10 @@ def test_shipped_model_makes_a_transition():
         assert tr[c][-1] == pytest.approx(b.get(c, 0.0), abs=1e-5)
     assert np.all(np.abs(np.diff(tr.values, axis=0)) < 0.25)  # no conspicuous jumps
     raw = load_model(__import__("mimika.learn.interp", fromlist=["x"]).default_model_path())
-    assert raw.checkpoint["kind"] == "rtn"
+    assert raw.checkpoint["kind"] == "timing"
+    val = raw.checkpoint["validation"]  # held-out evidence the learned easing decides on
+    assert "leave-one-take-out" in val["source"] and len(val["bins"]) == 3
+    assert all(b["n"] > 0 and b["use_model"] == (b["rel"] < 0) for b in val["bins"])
 
 
 def test_learned_easing_in_a_timeline():

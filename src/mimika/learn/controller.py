@@ -264,6 +264,28 @@ class Controller:
         return x
 
     # -- rendering ----------------------------------------------------------------------------
+    def traversal_images(self, *, head: Any = "builtin", values: Sequence[float] = TRAVERSAL,
+                         label: str | None = None, tile: tuple[int, int] = (160, 160),
+                         view: str = "front", progress: Progress | None = None
+                         ) -> list[np.ndarray]:
+        """Each slider swept over ``values`` (the others 0), rendered on ``head``: a list of
+        ``latent_dim × len(values)`` (H, W, 3) uint8 images, slider by slider."""
+        from mimika.facs.blender import blend_frames
+        from mimika.render import Renderer
+
+        rig = _rig(head)
+        grid = self.traversal(values, label=label)  # (d, n, K)
+        d, n, _ = grid.shape
+        flat, chans = blend_frames(grid.reshape(d * n, -1), self.channels)
+        images = []
+        with Renderer(rig.head, size=tile) as r:
+            for k in range(d * n):
+                aus = _supported(dict(zip(chans, flat[k].tolist(), strict=True)), rig)
+                images.append(r.render(rig.deform(aus), view=view))
+                if progress:
+                    progress(k + 1, d * n)
+        return images
+
     def render_grid(self, *, head: Any = "builtin", values: Sequence[float] = TRAVERSAL,
                     label: str | None = None, tile: tuple[int, int] = (160, 160),
                     view: str = "front", title: str | None = None,
@@ -272,22 +294,12 @@ class Controller:
 
         Returns an (H, W, 3) uint8 contact sheet of ``latent_dim × len(values)`` tiles.
         """
-        from mimika.render import Renderer, contact_sheet
+        from mimika.render import contact_sheet
 
-        rig = _rig(head)
-        grid = self.traversal(values, label=label)  # (d, n, K)
-        d, n, _ = grid.shape
-        from mimika.facs.blender import blend_frames
-
-        flat, chans = blend_frames(grid.reshape(d * n, -1), self.channels)
-        images, names = [], []
-        with Renderer(rig.head, size=tile) as r:
-            for k in range(d * n):
-                aus = _supported(dict(zip(chans, flat[k].tolist(), strict=True)), rig)
-                images.append(r.render(rig.deform(aus), view=view))
-                names.append(f"z{k // n + 1}={values[k % n]:+g}")
-                if progress:
-                    progress(k + 1, d * n)
+        images = self.traversal_images(head=head, values=values, label=label, tile=tile,
+                                       view=view, progress=progress)
+        d, n = self.latent_dim, len(values)
+        names = [f"z{k // n + 1}={values[k % n]:+g}" for k in range(d * n)]
         if title is None:
             what = f"label {label}" if label else self.kind.upper()
             title = (f"mimika - latent traversal ({what}): rows z1..z{d}, columns "

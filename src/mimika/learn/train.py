@@ -222,7 +222,8 @@ def train(data: Prepared, config: TrainConfig, *, progress: Progress | None = No
     seg_train: dict[tuple, list[Transition]] = {}
     for t in data.items("train"):
         seg_train.setdefault((t.take, t.start, t.length), []).append(t)
-    train_takes = [data.takes[n] for n in data.split.train]
+    train_takes = ([data.takes[n] for n in data.split.train] if config.windows_per_epoch > 0
+                   else [])
     val_items = data.items("val") + [w for n in data.split.val for L in config.val_window_lengths
                                      for w in fixed_windows(data.takes[n], L, stride=45)]
     if not seg_train and config.windows_per_epoch <= 0:
