@@ -235,8 +235,9 @@ def plots(takes, loto, results, models) -> None:
                    label=name, color="k" if name == "ground truth" else None)
         ax.set_xticks(range(len(t["groups"])), t["groups"], fontsize=8)
         ax.set_title(label + " — median over held-out transitions", fontsize=8)
-    axes[0].legend(fontsize=6)
-    fig.tight_layout()
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=len(keys),
+               fontsize=7)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(IMG / "transitions_timing.png")
     plt.close(fig)
     # 3. examples: the largest held-out transitions of the range-of-motion take
