@@ -1,7 +1,8 @@
 """Seed 000's training-composition study (models a–i), on the transitions our takes contain.
 
     MIMIKA_MOTION_DIR=../shared/motion/livelinkface .venv/bin/python \
-        bench/transitions_composition.py [--models seed,timing] [--out DIR] [--reuse]
+        bench/transitions_composition.py [--models seed,timing] [--out DIR] [--reuse] \
+        [--only abcdefghi] [--seed-epochs N]
 
 The seed trained its LSTM nine times on different selections of its transitions and compared
 transitions from and to one expression ("happy", the one recorded with every other):
@@ -12,7 +13,9 @@ the *focal* class is the labelled class with the most partner classes (as "happy
 test set holds out the last two occurrences of every focal pair (one if it occurs twice; the
 seed evaluated two variants of each), and the compositions are drawn from the rest.
 Models are trained with the shipped recipes (seed LSTM: up to 60 epochs, early stopping on 10 %
-of the other transitions); each is cached in ``--out``.
+of the other transitions); ``--seed-epochs N`` runs a reduced study (the seed LSTM for N epochs,
+lr ×0.1 after half of them, no early stop); each model is cached in ``--out``, and ``--only``
+trains a subset of a–i (e.g. two processes on two cores, then one ``--reuse`` run for the tables).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import pickle
 import sys
 import time
 from collections import Counter, defaultdict
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -81,7 +85,15 @@ def main() -> None:
     ap.add_argument("--models", default="seed,timing")
     ap.add_argument("--out", default="/tmp/mimika-composition")
     ap.add_argument("--reuse", action="store_true")
+    ap.add_argument("--only", default=MODELS, help="train only these of a–i (then stop)")
+    ap.add_argument("--seed-epochs", type=int, default=0,
+                    help="reduced study: the seed LSTM for this many epochs (0: its recipe)")
     a = ap.parse_args()
+    recipes = dict(RECIPES)
+    if a.seed_epochs:
+        n = a.seed_epochs
+        recipes["seed"] = replace(RECIPES["seed"], epochs=n, decay_every=max(1, n // 2),
+                                  restore_every=max(1, n // 4), patience=0)
     if not a.data:
         sys.exit("set MIMIKA_MOTION_DIR or pass --data")
     out = Path(a.out)
@@ -118,6 +130,8 @@ def main() -> None:
     for kind in a.models.split(","):
         for m in MODELS:
             key = out / f"{kind}_{m}.pkl"
+            if m not in a.only:
+                continue
             if a.reuse and key.exists():
                 ck = pickle.loads(key.read_bytes())
             else:
@@ -125,12 +139,14 @@ def main() -> None:
                 data = Prepared(takes, Split(("train",), ("val",), ()), seg, holds,
                                 {"train": [x for k in comp[m] for x in variants[k]],
                                  "val": [linear(k) for k in val]})
-                ck = train(data, RECIPES[kind])
+                ck = train(data, recipes[kind])
                 key.write_bytes(pickle.dumps(ck))
                 print(f"  {kind} {m}: {len(ck['history'])} epochs, best {ck['best_epoch']}, "
                       f"{time.perf_counter() - t0:.0f} s", flush=True)
             gens[f"{kind} {m}"] = model_generator(load_state(ck))
         results[kind] = True
+    if set(a.only) != set(MODELS):
+        return
     rows = {}
     for name, g in gens.items():
         out_frames = [g(t.window, t.target, t.length) for t in test_items]
