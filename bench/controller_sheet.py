@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from mimika.face.heads import load_head
 from mimika.learn.controller import TRAVERSAL, Controller
-from mimika.render import contact_sheet, save_png
+from mimika.render import contact_sheet
 
 
 def main() -> None:
@@ -37,12 +37,17 @@ def main() -> None:
     c = Controller.load(a.model)
     head, rig = load_head() if a.head is None else load_head(a.head)
     n = len(TRAVERSAL)
-    images = c.traversal_images(head=rig, tile=(200, 200))
+    # 240-pixel renders cropped to the face (brows to chin), so small changes show
+    images = [np.ascontiguousarray(im[60:210, 50:190])
+              for im in c.traversal_images(head=rig, tile=(240, 240))]
     names = [f"z{k // n + 1}={TRAVERSAL[k % n]:+g}" for k in range(len(images))]
     sheet = contact_sheet(images, names, columns=n, title=(
         f"mimika controller ({c.kind.upper()}, {c.latent_dim} sliders) on the {head.name} "
         "head: rows z1..z%d, columns -3 .. 3, others 0" % c.latent_dim))
-    save_png(sheet, a.output)
+    from PIL import Image  # a quantised PNG keeps the docs small
+
+    Image.fromarray(sheet).quantize(colors=48, method=Image.Quantize.MEDIANCUT).save(
+        a.output, optimize=True)
     print(f"wrote {a.output} ({sheet.shape[1]}x{sheet.shape[0]})")
     img = np.array(images, np.float32).reshape(c.latent_dim, n, *images[0].shape)
     grid = c.traversal()  # (d, n, K) AU frames
