@@ -103,6 +103,27 @@ def test_shipped_model_makes_a_transition():
     assert all(b["n"] > 0 and b["use_model"] == (b["rel"] < 0) for b in val["bins"])
 
 
+def test_shipped_seed_lstm_for_comparison():
+    """Seed 000's LSTM ships as ``model="seed"``: it makes a transition that starts and ends
+    where asked, and falls back wherever its validation record has it lose or has no data."""
+    from mimika.learn import transition
+    from mimika.learn.interp import default_model_path, fallback_easing
+
+    raw = load_model(default_model_path("seed"))
+    assert raw.checkpoint["kind"] == "seed"
+    assert default_model_path("seed").stat().st_size < 5_000_000
+    bins = raw.checkpoint["validation"]["bins"]
+    for b in bins:
+        size = min(b["lo"] + 0.1, 0.9)
+        uses_model = fallback_easing(raw.checkpoint, size) is None
+        assert uses_model == (b["n"] > 0 and b["use_model"])
+    a, b = {"AU12": 0.8, "AU06": 0.6}, {"AU01": 0.7, "AU02": 0.7}
+    tr = transition(a, b, duration=0.5, fps=30, model="seed")
+    assert tr.n_frames == 16
+    assert tr["AU12"][0] == pytest.approx(0.8, abs=1e-5)
+    assert tr["AU01"][-1] == pytest.approx(0.7, abs=1e-5)
+
+
 def test_learned_easing_in_a_timeline():
     import mimika.learn  # noqa: F401  (registers "learned")
     from mimika.timeline import Event, get_interpolator, sample, timeline_from_events
