@@ -27,15 +27,17 @@ def run(monkeypatch, capsys):
 
 
 def test_sample_prints_aus(run):
-    rc, out, err = run("gan", "sample", "--z", "-3,2,0,0")
+    rc, out, err = run("gan", "sample", "--z", "-3,2,0,0,0,0")  # the default controller: 6
     assert rc == 0 and "AU" in out and err == ""
+    rc, out4, err = run("gan", "sample", "--model", "seed", "--z", "-3,2,0,0")  # seed's WGAN
+    assert rc == 0 and "AU" in out4 and out4 != out
 
 
 def test_bad_z_length_is_one_line(run):
     rc, _, err = run("gan", "sample", "--z", "-3,2,0")
     assert rc == 2
     assert err.strip().count("\n") == 0
-    assert "3 value(s)" in err and "4 latent sliders" in err
+    assert "3 value(s)" in err and "6 latent sliders" in err
 
 
 def test_bad_z_text(run):
@@ -82,6 +84,21 @@ def test_train_gan_then_invert(tmp_path, run, capsys):
     assert rc == 0 and text.startswith("z = ") and "RMSE" in text
     rc, _, err = run("gan", "sample", "--model", str(out), "--z", "0,0,0,0")
     assert rc == 2 and "2 latent sliders" in err
+
+
+def test_train_controller_then_sample(tmp_path, run, capsys):
+    data = tmp_path / "takes"
+    data.mkdir()
+    _synthetic_take(data / "one.csv")
+    out = tmp_path / "c.pt"
+    rc, text, err = run("train", "controller", "--data", str(data), "--latent", "2", "--iters",
+                        "20", "-o", str(out), "-q")
+    assert rc == 0 and out.is_file()
+    rc, text, err = run("gan", "sample", "--model", str(out), "--z", "1.5,-1")
+    assert rc == 0 and "AU" in text
+    rc, _, err = run("train", "controller", "--data", str(data), "--latent", "0", "-o",
+                     str(out))
+    assert rc == 2 and "--latent 0" in err
 
 
 def test_train_gan_errors(tmp_path):

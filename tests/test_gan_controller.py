@@ -11,7 +11,7 @@ from mimika.learn.controller import TRAVERSAL, Controller  # noqa: E402
 
 @pytest.fixture(scope="module")
 def gan():
-    return Controller.load()
+    return Controller.load("seed")
 
 
 @pytest.fixture(scope="module")

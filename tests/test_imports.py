@@ -22,5 +22,26 @@ def test_cli_parser_loads_nothing_heavy():
 
 
 def test_learned_easing_registers_without_torch():
-    assert loaded_after("from mimika.timeline.easing import get_interpolator; "
-                        "get_interpolator('learned')") == []
+    assert loaded_after("import mimika.learn; from mimika.timeline.easing import "
+                        "get_interpolator; get_interpolator('learned')") == []
+    assert loaded_after("import mimika.cli; mimika.cli.build_parser(); from mimika.timeline "
+                        "import get_interpolator; get_interpolator('learned')") == []
+
+
+def test_timeline_never_imports_learn():
+    """Layering: the timeline is below learn; 'learned' is registered from above."""
+    import ast
+    from pathlib import Path
+
+    import mimika.timeline
+
+    for f in Path(mimika.timeline.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(f.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            assert not any(n.startswith("mimika.learn") for n in names), f
+    code = ("import sys; import mimika.timeline as t; "
+            "print('mimika.learn' in sys.modules, 'learned' in t.easing_names())")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.split() == ["False", "False"]

@@ -97,7 +97,31 @@ def test_shipped_model_makes_a_transition():
         assert tr[c][-1] == pytest.approx(b.get(c, 0.0), abs=1e-5)
     assert np.all(np.abs(np.diff(tr.values, axis=0)) < 0.25)  # no conspicuous jumps
     raw = load_model(__import__("mimika.learn.interp", fromlist=["x"]).default_model_path())
-    assert raw.checkpoint["kind"] == "rtn"
+    assert raw.checkpoint["kind"] == "timing"
+    val = raw.checkpoint["validation"]  # held-out evidence the learned easing decides on
+    assert "leave-one-take-out" in val["source"] and len(val["bins"]) == 3
+    assert all(b["n"] > 0 and b["use_model"] == (b["rel"] < 0) for b in val["bins"])
+
+
+def test_shipped_seed_lstm_for_comparison():
+    """Seed 000's LSTM ships as ``model="seed"``: it makes a transition that starts and ends
+    where asked, and falls back wherever its validation record has it lose or has no data."""
+    from mimika.learn import transition
+    from mimika.learn.interp import default_model_path, fallback_easing
+
+    raw = load_model(default_model_path("seed"))
+    assert raw.checkpoint["kind"] == "seed"
+    assert default_model_path("seed").stat().st_size < 5_000_000
+    bins = raw.checkpoint["validation"]["bins"]
+    for b in bins:
+        size = min(b["lo"] + 0.1, 0.9)
+        uses_model = fallback_easing(raw.checkpoint, size) is None
+        assert uses_model == (b["n"] > 0 and b["use_model"])
+    a, b = {"AU12": 0.8, "AU06": 0.6}, {"AU01": 0.7, "AU02": 0.7}
+    tr = transition(a, b, duration=0.5, fps=30, model="seed")
+    assert tr.n_frames == 16
+    assert tr["AU12"][0] == pytest.approx(0.8, abs=1e-5)
+    assert tr["AU01"][-1] == pytest.approx(0.7, abs=1e-5)
 
 
 def test_learned_easing_in_a_timeline():

@@ -95,3 +95,28 @@ def test_real_slice_has_holds_and_transitions():
     assert all(h.length >= 5 for h in holds)
     assert all(b.start > a.end for a, b in itertools.pairwise(holds))
     assert len(between(x, holds)) >= 4
+
+
+def test_segmentation_does_not_depend_on_file_order(rng):
+    """The segmenter fitted on the same takes in any order gives the same holds."""
+    takes = [synthetic_take(np.random.default_rng(s), n_cycles=2)[0] for s in range(3)]
+    ref = None
+    for perm in itertools.permutations(range(3)):
+        seg = Segmenter(rows=5, cols=5, n_groups=4, seed=0).fit([takes[i] for i in perm])
+        holds = [[(h.start, h.end, h.label) for h in seg.holds(x)] for x in takes]
+        assert ref is None or holds == ref, perm
+        ref = holds
+
+
+@pytest.mark.skipif(not os.environ.get("MIMIKA_MOTION_DIR"), reason="needs MIMIKA_MOTION_DIR "
+                    "(real Live Link Face takes, e.g. shared/motion/livelinkface)")
+def test_real_segmentation_does_not_depend_on_file_order():
+    from mimika.learn.data import list_takes
+    from mimika.learn.train import prepare
+
+    paths = list_takes(os.environ["MIMIKA_MOTION_DIR"])
+    a = prepare(paths, augment=False)
+    b = prepare(paths[::-1], augment=False, val=list(a.split.val), test=list(a.split.test))
+    for n in a.takes:
+        assert [(h.start, h.end, h.label) for h in a.holds[n]] == \
+            [(h.start, h.end, h.label) for h in b.holds[n]], n

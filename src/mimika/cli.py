@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from mimika.commands import MODULES
 from mimika.errors import MimikaError
 from mimika.limits import OPTIONS, override
+from mimika.plugins import load_plugins
 
 
 class _Parser(argparse.ArgumentParser):
@@ -34,6 +35,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    load_plugins()  # e.g. the timeline's 'learned' easing (light: no torch)
     p = _Parser(prog="mimika", description="Animate 3D faces with FACS Action Units.")
     p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)

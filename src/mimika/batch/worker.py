@@ -90,8 +90,10 @@ def _clip_frames(rig: Any, renderer: Any, item: Mapping[str, Any],
                  settings: Mapping[str, Any]) -> tuple[list[np.ndarray], Any]:
     """Onset–apex–offset frames of ``item``'s requested AUs (blended per frame); a spoken
     clip lasts its utterance, lip-synced (returned as the second value, else None)."""
+    from mimika.plugins import load_plugins
     from mimika.timeline import Event, sample, timeline_from_events
 
+    load_plugins()  # a worker process starts without the CLI's plug-ins (ease "learned")
     a = settings["animation"]
     utt = _utterance(a["speech"], a.get("audio"), a.get("lang", "en")) if a.get("speech") \
         else None

@@ -10,7 +10,7 @@ import argparse
 import re
 import sys
 
-from mimika.commands._util import progress_bar, size_arg
+from mimika.commands._util import add_head_arg, progress_bar, size_arg
 from mimika.errors import ParameterError
 
 VIEWS = ("front", "three-quarter", "profile")
@@ -106,20 +106,20 @@ def cmd_invert(args: argparse.Namespace) -> int:
 
 
 def _common(q: argparse.ArgumentParser, *, render: bool = True) -> None:
-    q.add_argument("--model", help="a checkpoint from 'mimika train gan' (default: the shipped "
-                                   "model; the conditional one with --label/--conditional)")
+    q.add_argument("--model", help="a checkpoint from 'mimika train controller/gan', or a "
+                                   "shipped model: default (the WAE controller), seed (seed "
+                                   "001's WGAN); the conditional one with --label/--conditional")
     q.add_argument("--conditional", action="store_true",
                    help="use the shipped conditional (emotion-label) model")
     q.add_argument("--label", help="emotion for a conditional model (e.g. surprise)")
     if render:
-        q.add_argument("--head", default="builtin",
-                       help="builtin (default), ict, an ICT-FaceKit folder or an .obj face mesh")
+        add_head_arg(q)
         q.add_argument("--view", default="front", choices=VIEWS)
     q.add_argument("-q", "--quiet", action="store_true")
 
 
 def register(sub) -> None:
-    g = sub.add_parser("gan", help="latent-slider face controller (WGAN, seed 001)")
+    g = sub.add_parser("gan", help="latent-slider face controller (WAE; seed 001's WGAN)")
     gs = g.add_subparsers(dest="gan_command", required=True, parser_class=type(g))
 
     s = gs.add_parser("sample", help="one face from slider values z (prints its AUs)")
@@ -150,8 +150,43 @@ def register(sub) -> None:
     from mimika.commands.learn import train_subparsers
 
     t = train_subparsers(sub).add_parser(
-        "gan", help="train the latent-slider controller (WGAN) on takes")
+        "gan", help="train seed 001's latent-slider WGAN (or the conditional one) on takes")
     add_train_gan_arguments(t)
+    c = train_subparsers(sub).add_parser(
+        "controller", help="train the default latent-slider controller (WAE) on takes")
+    c.add_argument("--data", help="folder of takes (default $MIMIKA_MOTION_DIR)")
+    c.add_argument("--latent", type=int, default=6, help="sliders d (default 6)")
+    c.add_argument("--iters", type=int, default=None, help="iterations (default 10000)")
+    c.add_argument("--test-take", action="append", default=[], metavar="NAME",
+                   help="take to leave out (file stem, repeatable; default none)")
+    c.add_argument("--seed", type=int, default=0)
+    c.add_argument("-o", "--output", required=True, help="checkpoint to write (.pt)")
+    c.add_argument("-q", "--quiet", action="store_true")
+    c.set_defaults(func=train_controller_command)
+
+
+def train_controller_command(args: argparse.Namespace) -> int:
+    """``mimika train controller``: train the WAE controller and save its checkpoint."""
+    if not args.output.lower().endswith(".pt"):
+        raise ParameterError(f"output {args.output!r} must be a .pt file")
+    for name in ("latent", "iters"):
+        v = getattr(args, name)
+        if v is not None and v < 1:
+            raise ParameterError(f"--{name} {v} must be ≥ 1")
+    try:
+        from mimika.learn.wae import train_from_takes
+        from mimika.learn.wgan import save_checkpoint
+    except ImportError:
+        raise ParameterError("training needs PyTorch: pip install 'mimika[learn]'") from None
+    state, res = train_from_takes(args.data, latent_dim=args.latent, iters=args.iters,
+                                  test_takes=args.test_take, seed=args.seed,
+                                  progress=progress_bar(args.quiet, "training"))
+    save_checkpoint(args.output, state)
+    if not args.quiet:
+        print(f"wrote {args.output}: WAE d={args.latent}, {res.config.iters} iterations in "
+              f"{res.seconds:.0f} s on {state['meta']['train_frames']} frames; final weighted "
+              f"reconstruction {float(res.history['reconstruction'][-100:].mean()):.5f}")
+    return 0
 
 
 # -- mimika train gan -----------------------------------------------------------------------------

@@ -10,7 +10,7 @@ import argparse
 import sys
 import time
 
-from mimika.commands._util import limit_options
+from mimika.commands._util import add_head_arg, limit_options
 from mimika.errors import ParameterError
 
 
@@ -25,11 +25,13 @@ def train_subparsers(sub) -> argparse._SubParsersAction:
 
 
 def cmd_train_transitions(args: argparse.Namespace) -> int:
-    from mimika.learn.train import TrainConfig, prepare, save_checkpoint, train
+    from dataclasses import replace
+
+    from mimika.learn.train import RECIPES, load_state, prepare, save_checkpoint, train, validate
 
     if not args.output.endswith(".pt"):
         raise ParameterError(f"output {args.output!r} must be a .pt file")
-    if args.epochs < 1:
+    if args.epochs is not None and args.epochs < 1:
         raise ParameterError(f"--epochs={args.epochs} must be ≥ 1")
     say = (lambda *a: None) if args.quiet else (lambda *a: print(*a, file=sys.stderr))
     t0 = time.perf_counter()
@@ -38,19 +40,27 @@ def cmd_train_transitions(args: argparse.Namespace) -> int:
     say(f"takes: train {', '.join(data.split.train)} | val {', '.join(data.split.val)} | "
         f"test {', '.join(data.split.test)}; transitions {n['train']}/{n['val']}/{n['test']} "
         f"({time.perf_counter() - t0:.1f} s)")
-    cfg = TrainConfig(model=args.model, epochs=args.epochs, lr=args.lr, threads=args.threads,
-                      seed=args.seed)
+    cfg = replace(RECIPES[args.model], seed=args.seed, threads=args.threads)
+    if args.epochs is not None:
+        cfg.epochs = args.epochs
+    if args.lr is not None:
+        cfg.lr = args.lr
 
     def progress(epoch: int, total: int, rec: dict) -> None:
         say(f"epoch {epoch}/{total}  train {rec['train']:.5f}  val {rec['val']:.5f}  "
             f"lr {rec['lr']:.0e}  {rec['time']:.0f} s")
 
     ck = train(data, cfg, progress=progress)
+    ck["validation"] = validate(load_state(ck), data)
     p = save_checkpoint(ck, args.output, half=args.half)
     if not args.quiet:
         print(f"wrote {p} ({args.model}, {ck['n_params']:,} parameters, best val MSE "
               f"{ck['best_val']:.5f} at epoch {ck['best_epoch']}, "
               f"{ck['train_seconds']:.0f} s, {p.stat().st_size / 1e6:.1f} MB)")
+        for b in (ck["validation"] or {}).get("bins", []):
+            use = "model" if b["use_model"] else f"falls back to {b['baseline'] or 'default'}"
+            rel = f", {100 * b['rel']:+.1f} % MSE vs {b['baseline']}" if b["n"] else ""
+            print(f"  ease=learned, {b['name']} transitions ({b['n']} validated{rel}): {use}")
     return 0
 
 
@@ -63,7 +73,8 @@ def cmd_transition(args: argparse.Namespace) -> int:
         raise ParameterError(f"output {out!r} must be a .csv, .png or .mp4 file")
     a = get_expression(args.start, args.intensity)
     b = get_expression(args.to, args.intensity)
-    track = transition(a, b, duration=args.duration, fps=args.fps, model=args.model)
+    track = transition(a, b, duration=args.duration, fps=args.fps, model=args.model,
+                       fallback=not args.no_fallback)
     if out.lower().endswith(".csv"):
         from mimika.io.tracks import write_au_csv
 
@@ -91,17 +102,18 @@ def register(sub) -> None:
                         "takes (Live Link Face / OpenFace / AU CSV)")
     q.add_argument("--data", required=True, metavar="DIR", help="folder of *.csv takes")
     q.add_argument("-o", "--output", required=True, help="checkpoint to write (.pt)")
-    q.add_argument("--model", default="rtn", choices=("seed", "rtn"),
-                   help="seed: seed 000's LSTM; rtn: the improved model (default)")
-    q.add_argument("--epochs", type=int, default=40, help="epochs (default 40; seed ≈ 55 s "
-                   "each on 2 CPU threads, rtn ≈ 2 s)")
-    q.add_argument("--lr", type=float, default=0.005, help="Adam learning rate (×0.1 at each "
-                   "quarter of the run; seed 000 used 0.01)")
+    q.add_argument("--model", default="timing", choices=("timing", "seed", "rtn"),
+                   help="timing: the learned timing model (default, shipped); seed: seed "
+                   "000's LSTM; rtn: an LSTM with Harvey et al.'s RTN ideas")
+    q.add_argument("--epochs", type=int, default=None, help="epochs (default: the model's "
+                   "recipe — timing 40, seed up to 60 with early stopping, rtn 40)")
+    q.add_argument("--lr", type=float, default=None, help="Adam learning rate (×0.1 at each "
+                   "quarter of the run; default: the model's recipe)")
     q.add_argument("--val", action="append", metavar="TAKE", help="validation take (file stem; "
                    "repeatable; default 'facial' or the second-to-last)")
     q.add_argument("--test", action="append", metavar="TAKE", help="held-out test take "
                    "(repeatable; default 'apfel' or the last)")
-    q.add_argument("--threads", type=int, default=2, help="torch CPU threads (default 2)")
+    q.add_argument("--threads", type=int, default=1, help="torch CPU threads (default 1)")
     q.add_argument("--seed", type=int, default=0, help="random seed")
     q.add_argument("--half", action="store_true", help="store float16 weights (half size)")
     q.add_argument("-q", "--quiet", action="store_true")
@@ -115,10 +127,13 @@ def register(sub) -> None:
     r.add_argument("--duration", type=float, default=1.0, help="seconds (default 1)")
     r.add_argument("--fps", type=float, default=30.0, help="frame rate (default 30)")
     r.add_argument("--intensity", type=float, default=1.0, help="scale of both expressions")
-    r.add_argument("--model", default=None, help="checkpoint (default: the shipped model)")
+    r.add_argument("--model", default=None, help="checkpoint, or a shipped model: builtin "
+                   "(default, the timing model) or seed (seed 000's LSTM, for comparison)")
+    r.add_argument("--no-fallback", action="store_true", help="always the model's curves, "
+                   "also where validation found it worse than interpolation")
     r.add_argument("--frames", type=int, default=6,
                    help="rendered frames in the PNG strip (0: plot only)")
-    r.add_argument("--head", default="builtin", help="head for the PNG strip and the MP4")
+    add_head_arg(r)
     r.add_argument("-o", "--output", required=True, help=".csv (AU CSV), .png or .mp4")
     r.add_argument("-q", "--quiet", action="store_true")
     limit_options(r, "max_duration", "max_frames")

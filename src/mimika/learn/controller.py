@@ -1,8 +1,10 @@
-"""The latent-slider controller: a trained (conditional) WGAN behind a few sliders.
+"""The latent-slider controller: a trained generator of AU frames behind a few sliders.
 
-``Controller.load()`` opens the model shipped with mimika (``learn/data/gan.pt``; the
-conditional one with ``conditional=True``); ``.sample(z, label=None)`` returns blended AU
-intensities for one slider setting. Every generated frame is de-normalised
+``Controller.load()`` opens the model shipped with mimika — the Wasserstein auto-encoder
+(``learn/data/controller.pt``, :mod:`mimika.learn.wae`); ``load("seed")`` seed 001's WGAN
+(``gan.pt``), ``conditional=True`` the conditional WGAN-GP (``cgan.pt``);
+``.sample(z, label=None)`` returns blended AU intensities for one slider setting. Every
+generated frame is de-normalised
 (``x = G(z)·σ + μ``), clamped to [0, 1] and passed through the AU Blender before use.
 
 >>> c = Controller.load()                       # doctest: +SKIP
@@ -28,16 +30,23 @@ log = logging.getLogger(__name__)
 
 __all__ = ["SHIPPED", "TRAVERSAL", "Controller", "shipped_model"]
 
-#: the models that ship with the package (in ``mimika/learn/data``)
-SHIPPED = {"wgan": "gan.pt", "cgan": "cgan.pt"}
+#: the models that ship with the package (in ``mimika/learn/data``), by name
+SHIPPED = {"wae": "controller.pt", "wgan": "gan.pt", "cgan": "cgan.pt"}
+#: other names of shipped models
+ALIASES = {"default": "wae", "builtin": "wae", "seed": "wgan", "conditional": "cgan"}
 #: slider values of a traversal grid's columns (seed 001: −3 … 3; covers 99.7 % of N(0, 1))
 TRAVERSAL = (-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0)
 Progress = Callable[[int, int], None]
 
 
-def shipped_model(conditional: bool = False) -> Path:
-    """Path of the shipped unconditional (or conditional) model."""
-    name = SHIPPED["cgan" if conditional else "wgan"]
+def shipped_model(conditional: bool = False, name: str = "wae") -> Path:
+    """Path of a shipped model: ``name`` (see :data:`SHIPPED`, :data:`ALIASES`), or the
+    conditional one."""
+    key = "cgan" if conditional else ALIASES.get(name, name)
+    if key not in SHIPPED:
+        raise ParameterError(f"unknown model {name!r}: the shipped ones are "
+                             f"{', '.join([*SHIPPED, *ALIASES])}, or give a checkpoint path")
+    name = SHIPPED[key]
     p = Path(str(resources.files("mimika.learn").joinpath("data", name)))
     if not p.is_file():
         raise DataError(f"the shipped model {name} is missing from this installation ({p}); "
@@ -53,6 +62,7 @@ class Controller:
 
         from mimika.learn.cgan import CondGenerator
         from mimika.learn.inversion import Encoder
+        from mimika.learn.wae import WAEDecoder, WAEEncoder
         from mimika.learn.wgan import Generator
 
         self.path = Path(path) if path is not None else None
@@ -72,8 +82,10 @@ class Controller:
         elif self.kind == "cgan":
             self._g = CondGenerator(d, K, len(self.labels), cfg["hidden"], cfg["embed"],
                                     cfg["leak"])
+        elif self.kind == "wae":
+            self._g = WAEDecoder(d, K, cfg["hidden"], cfg["leak"])
         else:
-            raise DataError(f"unknown model kind {self.kind!r} (expected wgan or cgan)")
+            raise DataError(f"unknown model kind {self.kind!r} (expected wae, wgan or cgan)")
         try:
             self._g.load_state_dict(state["generator"])
         except RuntimeError as e:
@@ -81,7 +93,8 @@ class Controller:
         self._g.eval()
         self._enc = None
         if state.get("encoder"):
-            self._enc = Encoder(K, d, len(self.labels) if self.kind == "cgan" else 0)
+            self._enc = (WAEEncoder(K, d, cfg["hidden"], cfg["leak"]) if self.kind == "wae"
+                         else Encoder(K, d, len(self.labels) if self.kind == "cgan" else 0))
             self._enc.load_state_dict(state["encoder"])
             self._enc.eval()
         self._torch = torch
@@ -90,10 +103,14 @@ class Controller:
     @classmethod
     def load(cls, path: str | os.PathLike | None = None, *,
              conditional: bool = False) -> Controller:
-        """Load a checkpoint (default: the shipped model; ``conditional`` picks ``cgan.pt``)."""
+        """Load a checkpoint path or a shipped model's name (default: the WAE; ``"seed"``:
+        seed 001's WGAN; ``conditional`` picks the conditional WGAN-GP)."""
         from mimika.learn.wgan import load_checkpoint
 
-        p = Path(path) if path is not None else shipped_model(conditional)
+        if path is None or str(path) in (*SHIPPED, *ALIASES):
+            p = shipped_model(conditional, "wae" if path is None else str(path))
+        else:
+            p = Path(path)
         return cls(load_checkpoint(p), path=p)
 
     def __repr__(self) -> str:
@@ -199,9 +216,10 @@ class Controller:
 
     # -- inversion ----------------------------------------------------------------------------
     def invert_batch(self, frames: np.ndarray, labels: Sequence[str] | None = None, *,
-                     steps: int = 200, restarts: int = 6, seed: int = 0
-                     ) -> tuple[np.ndarray, np.ndarray]:
-        """Real frames (N, K) over :attr:`channels` → (z (N, d), reconstructions (N, K))."""
+                     steps: int = 200, restarts: int = 6, seed: int = 0,
+                     fit: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Real frames (N, K) over :attr:`channels` → (z (N, d), reconstructions (N, K));
+        ``fit`` (K,) bool: fit only these channels (e.g. those another rig carries)."""
         from mimika.learn.inversion import invert_frames
 
         x = np.asarray(frames, np.float32)
@@ -220,7 +238,7 @@ class Controller:
             y = None
         return invert_frames(self._gen, np.clip(x, 0.0, 1.0), self.mean, self.std,
                              latent_dim=self.latent_dim, labels=y, encoder=self._enc,
-                             steps=steps, restarts=restarts, seed=seed)
+                             steps=steps, restarts=restarts, seed=seed, channels=fit)
 
     def invert(self, frame: dict[str, float] | Sequence[float] | np.ndarray,
                label: str | None = None, **kwargs: Any) -> np.ndarray:
@@ -246,6 +264,28 @@ class Controller:
         return x
 
     # -- rendering ----------------------------------------------------------------------------
+    def traversal_images(self, *, head: Any = "builtin", values: Sequence[float] = TRAVERSAL,
+                         label: str | None = None, tile: tuple[int, int] = (160, 160),
+                         view: str = "front", progress: Progress | None = None
+                         ) -> list[np.ndarray]:
+        """Each slider swept over ``values`` (the others 0), rendered on ``head``: a list of
+        ``latent_dim × len(values)`` (H, W, 3) uint8 images, slider by slider."""
+        from mimika.facs.blender import blend_frames
+        from mimika.render import Renderer
+
+        rig = _rig(head)
+        grid = self.traversal(values, label=label)  # (d, n, K)
+        d, n, _ = grid.shape
+        flat, chans = blend_frames(grid.reshape(d * n, -1), self.channels)
+        images = []
+        with Renderer(rig.head, size=tile) as r:
+            for k in range(d * n):
+                aus = _supported(dict(zip(chans, flat[k].tolist(), strict=True)), rig)
+                images.append(r.render(rig.deform(aus), view=view))
+                if progress:
+                    progress(k + 1, d * n)
+        return images
+
     def render_grid(self, *, head: Any = "builtin", values: Sequence[float] = TRAVERSAL,
                     label: str | None = None, tile: tuple[int, int] = (160, 160),
                     view: str = "front", title: str | None = None,
@@ -254,22 +294,12 @@ class Controller:
 
         Returns an (H, W, 3) uint8 contact sheet of ``latent_dim × len(values)`` tiles.
         """
-        from mimika.render import Renderer, contact_sheet
+        from mimika.render import contact_sheet
 
-        rig = _rig(head)
-        grid = self.traversal(values, label=label)  # (d, n, K)
-        d, n, _ = grid.shape
-        from mimika.facs.blender import blend_frames
-
-        flat, chans = blend_frames(grid.reshape(d * n, -1), self.channels)
-        images, names = [], []
-        with Renderer(rig.head, size=tile) as r:
-            for k in range(d * n):
-                aus = _supported(dict(zip(chans, flat[k].tolist(), strict=True)), rig)
-                images.append(r.render(rig.deform(aus), view=view))
-                names.append(f"z{k // n + 1}={values[k % n]:+g}")
-                if progress:
-                    progress(k + 1, d * n)
+        images = self.traversal_images(head=head, values=values, label=label, tile=tile,
+                                       view=view, progress=progress)
+        d, n = self.latent_dim, len(values)
+        names = [f"z{k // n + 1}={values[k % n]:+g}" for k in range(d * n)]
         if title is None:
             what = f"label {label}" if label else self.kind.upper()
             title = (f"mimika - latent traversal ({what}): rows z1..z{d}, columns "

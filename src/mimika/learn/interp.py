@@ -6,6 +6,12 @@ channels and samples it at the requested progress values. Channels the model doe
 follow the model's progress on an alias (AU26/AU25 → AU27, AU23 → AU24) where there is one,
 else a cosine ease; the result is nudged linearly so it equals ``a`` at u = 0 and ``b`` at
 u = 1 exactly, and clipped to [0, 1].
+
+**It never does worse than interpolation on validation**: a checkpoint carries a validation
+record (:func:`mimika.learn.protocol.validation_record`: per transition size, the model's MSE
+on held-out transitions against the best interpolator's). For a transition whose size class
+the model lost — or was never validated on — the easing falls back to that interpolator
+(cubic Hermite at rest = ``smoothstep``; without any record, the timeline's default easing).
 """
 
 from __future__ import annotations
@@ -25,14 +31,24 @@ from mimika.learn.data import MODEL_CHANNELS, SEED_FRAMES
 
 log = logging.getLogger(__name__)
 
-__all__ = ["DEFAULT_MODEL", "LearnedInterpolator", "register_learned", "transition"]
+__all__ = ["DEFAULT_MODEL", "LearnedInterpolator", "fallback_easing", "register_learned",
+           "transition"]
 
 ALIASES = {"AU26": "AU27", "AU25": "AU27", "AU23": "AU24"}
+#: protocol baselines → timeline easings (the timeline's transitions start at rest, where cubic
+#: Hermite is smoothstep)
+EASING_OF = {"linear": "linear", "cosine": "cosine", "hermite": "smoothstep",
+             "smoothstep": "smoothstep"}
 
 
-def default_model_path() -> Path:
-    """The shipped model, ``mimika/learn/data/transitions.pt``."""
-    return Path(str(resources.files("mimika.learn").joinpath("data/transitions.pt")))
+#: shipped checkpoints by name: the default timing model and seed 000's LSTM (for comparison)
+SHIPPED = {"builtin": "transitions.pt", "timing": "transitions.pt",
+           "seed": "transitions_seed.pt"}
+
+
+def default_model_path(name: str = "builtin") -> Path:
+    """A shipped model (``mimika/learn/data/…``): ``builtin``/``timing`` or ``seed``."""
+    return Path(str(resources.files("mimika.learn").joinpath("data", SHIPPED[name])))
 
 
 DEFAULT_MODEL = "builtin"
@@ -43,7 +59,8 @@ _LOCK = threading.Lock()
 def _model(path: str | os.PathLike | None):
     from mimika.learn.train import load_model
 
-    key = str(default_model_path() if path in (None, DEFAULT_MODEL) else Path(path))
+    name = DEFAULT_MODEL if path is None else str(path)
+    key = str(default_model_path(name) if name in SHIPPED else Path(path))
     with _LOCK:
         if key not in _CACHE:
             _CACHE[key] = load_model(key)
@@ -81,11 +98,12 @@ def _curves(model, a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
 
 def transition(start: Mapping[str, float], target: Mapping[str, float], *, duration: float,
                fps: float = 30.0, model: str | os.PathLike | None = None,
-               exact_ends: bool = True):
+               exact_ends: bool = True, fallback: bool = True):
     """A learned transition from ``start`` to ``target`` AUs (``{code: intensity}``).
 
     Returns an :class:`~mimika.tracks.AUTrack` of ``round(duration·fps) + 1`` frames (start
-    and target included) over the union of the model's channels with those of the inputs.
+    and target included) over the union of the model's channels with those of the inputs;
+    ``model`` and ``fallback`` as for :class:`LearnedInterpolator`.
     """
     from mimika.limits import check_timeline
     from mimika.tracks import AUTrack, valid_fps
@@ -99,8 +117,8 @@ def transition(start: Mapping[str, float], target: Mapping[str, float], *, durat
     a = np.array([float(start.get(c, 0.0)) for c in codes])
     b = np.array([float(target.get(c, 0.0)) for c in codes])
     u = np.arange(n + 1) / n
-    vals = LearnedInterpolator(model, exact_ends=exact_ends)(a, b, u, channels=codes,
-                                                             duration=duration)
+    vals = LearnedInterpolator(model, exact_ends=exact_ends, fallback=fallback)(
+        a, b, u, channels=codes, duration=duration)
     return AUTrack(vals, tuple(codes), fps, {"source": "learned transition"})
 
 
@@ -109,16 +127,20 @@ class LearnedInterpolator:
 
     Parameters
     ----------
-    model : checkpoint path, or None / ``"builtin"`` for the shipped model (loaded lazily)
+    model : checkpoint path, or a shipped model's name (None / ``"builtin"``: the default;
+        ``"seed"``: seed 000's LSTM), loaded lazily
     fps : rate the model generates at (default: the checkpoint's)
     exact_ends : nudge the curves so they start at ``a`` and end at ``b`` exactly
+    fallback : use the best interpolator where validation says the model is worse (False:
+        always the model — for comparisons)
     """
 
     def __init__(self, model: str | os.PathLike | None = None, *, fps: float | None = None,
-                 exact_ends: bool = True):
+                 exact_ends: bool = True, fallback: bool = True):
         self.model_path = model
         self.fps = fps
         self.exact_ends = exact_ends
+        self.fallback = fallback
 
     def __repr__(self) -> str:
         return f"<learned transition {self.model_path or DEFAULT_MODEL}>"
@@ -138,6 +160,12 @@ class LearnedInterpolator:
         n = int(np.clip(round(float(duration) * fps), 1, 600))
         am = _to_model(dict(zip(chans, a, strict=True)), mch)
         bm = _to_model(dict(zip(chans, b, strict=True)), mch)
+        fallback = (fallback_easing(model.checkpoint, float(np.max(np.abs(bm - am), initial=0)))
+                    if self.fallback else None)
+        if fallback is not None:
+            from mimika.timeline.easing import get_interpolator
+
+            return get_interpolator(fallback)(a, b, u, channels=chans, duration=duration)
         curves = _curves(model, am, bm, n)  # (n + 1, K) start … target
         grid = np.arange(n + 1) / n
         idx = {c: j for j, c in enumerate(mch)}
@@ -163,6 +191,33 @@ class LearnedInterpolator:
             f0, f1 = at(np.zeros(1))[0], at(np.ones(1))[0]
             out = out + (a - f0)[None] * (1 - u)[:, None] + (b - f1)[None] * u[:, None]
         return np.clip(out, 0.0, 1.0).astype(np.float32)
+
+
+def fallback_easing(checkpoint: Mapping, size: float) -> str | None:
+    """The easing to use instead of the model for a transition of ``size`` (largest AU change
+    over the model's channels), or None to use the model (see the module docstring)."""
+    from mimika.timeline.easing import DEFAULT_EASING
+
+    val = checkpoint.get("validation")
+    if not val:
+        _warn_once(f"model {checkpoint.get('kind')!r} has no validation record; the learned "
+                   f"easing falls back to {DEFAULT_EASING!r}")
+        return DEFAULT_EASING
+    for b in val["bins"]:
+        if b["lo"] <= size < b["hi"]:
+            if b["use_model"]:
+                return None
+            return EASING_OF.get(b.get("baseline") or "", DEFAULT_EASING)
+    return DEFAULT_EASING
+
+
+_WARNED: set[str] = set()
+
+
+def _warn_once(msg: str) -> None:
+    if msg not in _WARNED:
+        _WARNED.add(msg)
+        log.warning(msg)
 
 
 def register_learned(model: str | os.PathLike | None = None, *, name: str = "learned",

@@ -66,8 +66,8 @@ def fit_encoder(gen: GenFn, latent_dim: int, n_channels: int, n_labels: int = 0,
 def invert_frames(gen: GenFn, frames: np.ndarray, mean: np.ndarray, std: np.ndarray, *,
                   latent_dim: int, labels: np.ndarray | None = None,
                   encoder: Encoder | None = None, steps: int = 200, restarts: int = 6,
-                  prior: float = 1e-3, lr: float = 0.05, seed: int = 0
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  prior: float = 1e-3, lr: float = 0.05, seed: int = 0,
+                  channels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Latent vectors whose generated frames best match ``frames``.
 
     Parameters
@@ -75,6 +75,8 @@ def invert_frames(gen: GenFn, frames: np.ndarray, mean: np.ndarray, std: np.ndar
     frames : ndarray, shape (N, K), AU intensities in [0, 1]
     mean, std : (K,) the generator's normalisation
     labels : (N,) int, for a conditional generator
+    channels : (K,) bool, the channels to fit (default all; e.g. the channels a second
+        person's rig carries)
 
     Returns
     -------
@@ -97,9 +99,12 @@ def invert_frames(gen: GenFn, frames: np.ndarray, mean: np.ndarray, std: np.ndar
     yr = y.repeat(R) if y is not None else None
     opt = torch.optim.Adam([z], lr=lr)
 
+    keep = (torch.ones(x.shape[1]) if channels is None else
+            torch.from_numpy(np.asarray(channels, np.float32)))
+
     def err(zz: torch.Tensor) -> torch.Tensor:
         out = torch.clamp(gen(zz, yr) * sd + mu, 0.0, 1.0)
-        return ((out - xr) ** 2).mean(dim=1), out
+        return ((out - xr) ** 2 * keep).sum(dim=1) / keep.sum(), out
 
     for _ in range(steps):
         e, _ = err(z)

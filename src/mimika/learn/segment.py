@@ -17,6 +17,7 @@ All fitting is numpy; :class:`Segmenter` is fitted on training takes and applied
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import logging
 from collections.abc import Sequence
@@ -205,6 +206,14 @@ class Hold:
         return self.end - self.start
 
 
+def canonical_order(takes: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """``takes`` sorted by a digest of their frames: one order whatever order they came in."""
+    def key(x: np.ndarray) -> str:
+        return hashlib.sha256(np.ascontiguousarray(x, np.float32).tobytes()).hexdigest()
+
+    return sorted((np.asarray(x) for x in takes), key=key)
+
+
 class Segmenter:
     """PCA + SOM segmentation fitted on training frames (see the module docstring).
 
@@ -250,7 +259,9 @@ class Segmenter:
         return np.convolve(v, np.ones(5) / 5, mode="same")
 
     def fit(self, takes: Sequence[np.ndarray]) -> Segmenter:
-        """Fit on frames of ``takes`` (each (T, K))."""
+        """Fit on frames of ``takes`` (each (T, K)); the result does not depend on their order
+        (takes are put in a canonical order — by content — before any random draw)."""
+        takes = canonical_order(takes)
         acts, zs, speeds = [], [], []
         self.mu, self.comp = pca_fit(np.concatenate(takes), self.variance)
         for x in takes:

@@ -1,10 +1,11 @@
 """Training recipe for the transition models: folder of takes → split → segment → train.
 
 ``prepare(folder)`` reads every take (three gap-filling variants for training takes only),
-fits the PCA + SOM :class:`~mimika.learn.segment.Segmenter` on the training takes and cuts
-transition examples from holds in every take. ``train(data, config)`` trains a seed or RTN
-model on CPU with seed 000's schedule scaled to ``epochs`` (lr ×0.1 at each quarter, restore
-the best-validation weights every eighth, gradient clipping) and returns a checkpoint dict;
+fits the PCA + SOM :class:`~mimika.learn.segment.Segmenter` on all takes (unsupervised, in a
+canonical order) and cuts transition examples from holds in every take. ``train(data,
+config)`` trains a seed, RTN or timing model on CPU with seed 000's schedule scaled to
+``epochs`` (lr ×0.1 at each quarter, restore the best-validation weights every eighth,
+gradient clipping, optional early stop) and returns a checkpoint dict;
 ``save_checkpoint`` / ``load_model`` round-trip it (config, channels, fps, best val loss).
 """
 
@@ -52,10 +53,14 @@ class Prepared:
     split: Split
     segmenter: Segmenter
     holds: dict[str, list[Hold]]
-    transitions: dict[str, list[Transition]]  # per take, every fill variant of train takes
+    transitions: dict[str, list[Transition]]  # per take, from every gap-filling variant
 
     def items(self, part: str, *, fills: Sequence[str] | None = None) -> list[Transition]:
+        """Transitions of ``part``: every gap-filling variant for training, else the linear
+        fill only (unless ``fills`` says otherwise)."""
         names = getattr(self.split, part)
+        if fills is None and part != "train":
+            fills = ("linear",)
         return [t for n in names for t in self.transitions[n]
                 if fills is None or t.fill in fills]
 
@@ -68,24 +73,48 @@ def prepare(folder: str | os.PathLike | Sequence[str | os.PathLike], *,
              else [Path(p) for p in folder])
     split = make_split([p.stem for p in paths], val=val, test=test)
     takes: dict[str, Take] = {}
-    for p in paths:
+    for p in sorted(paths, key=lambda p: p.stem):
         part = split.of(p.stem)
         if part == "unused":
             continue
         fills = FILLS if (augment and part == "train") else ("linear",)
         takes[p.stem] = load_take(p, fills=fills)
+    return segment_split(takes, split, max_length=max_length)
+
+
+def segment_takes(takes: dict[str, Take], *, max_length: int = 60
+                  ) -> tuple[Segmenter, dict[str, list[Hold]], dict[str, list[Transition]]]:
+    """Fit one segmenter on every take (unsupervised: it sees frames, never a model's targets;
+    canonical order, so the result does not depend on the order of ``takes``), find each
+    take's holds and cut the transitions between them from every gap-filling variant."""
     if len({t.fps for t in takes.values()}) > 1:
         raise DataError("takes have different frame rates; resample them to one first")
-    seg = Segmenter().fit([takes[n].values for n in split.train])
+    names = sorted(takes)
+    seg = Segmenter().fit([takes[n].values for n in names])
     holds, trans = {}, {}
-    for n, t in takes.items():
-        holds[n] = seg.holds(t.values)
-        trans[n] = [x for f, v in t.variants.items()
-                    for x in transitions_between(v, holds[n], take=n, fill=f,
-                                                 max_length=max_length)]
+    for n in names:
+        holds[n] = seg.holds(takes[n].values)
+        trans[n] = []
+        for f, v in takes[n].variants.items():
+            for x in transitions_between(v, holds[n], take=n, fill=f, max_length=max_length):
+                if f == "linear" or not _same_as_linear(x, takes[n].values):
+                    trans[n].append(x)  # a fill only adds a transition where it differs
+    return seg, holds, trans
+
+
+def _same_as_linear(x: Transition, linear: np.ndarray) -> bool:
+    s = x.start
+    return bool(np.array_equal(x.window, linear[s - len(x.window) + 1:s + 1]) and
+                np.array_equal(x.frames, linear[s + 1:s + 1 + x.length]))
+
+
+def segment_split(takes: dict[str, Take], split: Split, *, max_length: int = 60) -> Prepared:
+    """:func:`segment_takes` over the takes of ``split``, as a :class:`Prepared`."""
+    used = {n: t for n, t in takes.items() if split.of(n) != "unused"}
+    seg, holds, trans = segment_takes(used, max_length=max_length)
     log.info("split train=%s val=%s test=%s; transitions: %s", split.train, split.val,
-             split.test, {n: len(v) for n, v in trans.items()})
-    return Prepared(takes, split, seg, holds, trans)
+             split.test, {n: sum(x.fill == "linear" for x in v) for n, v in trans.items()})
+    return Prepared(used, split, seg, holds, trans)
 
 
 @dataclass
@@ -102,9 +131,26 @@ class TrainConfig:
     windows_per_epoch: int = 256  # random in-betweening windows per epoch (train takes)
     window_lengths: tuple[int, int] = (5, 45)
     val_window_lengths: tuple[int, ...] = (15, 30)  # fixed windows added to validation
+    patience: int = 0  # stop when validation has not improved for this many epochs (0: never)
     seed: int = 0
     threads: int = 2
     model_args: dict = field(default_factory=dict)
+
+
+#: transition model kinds: seed 000's LSTM, the RTN-style LSTM, the learned timing model
+MODELS = ("seed", "rtn", "timing")
+#: each model's training recipe (the shipped models and the evaluation use these)
+RECIPES = {
+    # 192 numbers, transitions only: seconds per epoch
+    "timing": TrainConfig(model="timing", epochs=40, lr=0.05, windows_per_epoch=0,
+                          val_window_lengths=(), threads=1),
+    # seed 000's LSTM on transitions only; lr 0.01 (the seed's) diverges here even with
+    # clipping (the seed restarted such runs by hand), 0.002 does not; trained until the
+    # validation loss has not improved for 12 epochs
+    "seed": TrainConfig(model="seed", epochs=60, lr=0.002, windows_per_epoch=0,
+                        val_window_lengths=(), patience=12, threads=1),
+    "rtn": TrainConfig(model="rtn", epochs=40, lr=0.005, threads=1),
+}
 
 
 def _build(kind: str, n_channels: int, args: dict):
@@ -116,7 +162,11 @@ def _build(kind: str, n_channels: int, args: dict):
         from mimika.learn.transition_rtn import RTNConfig, RTNTransition
 
         return RTNTransition(RTNConfig(n_channels=n_channels, **args))
-    raise ParameterError(f"model={kind!r} must be 'seed' or 'rtn'")
+    if kind == "timing":
+        from mimika.learn.transition_timing import TimingConfig, TimingTransition
+
+        return TimingTransition(TimingConfig(n_channels=n_channels, **args))
+    raise ParameterError(f"model={kind!r} must be one of {', '.join(MODELS)}")
 
 
 def _tensors(items: Sequence[Transition]):
@@ -169,8 +219,11 @@ def train(data: Prepared, config: TrainConfig, *, progress: Progress | None = No
     rng = np.random.default_rng(config.seed)
     K = len(MODEL_CHANNELS)
     model = _build(config.model, K, config.model_args)
-    seg_train = data.items("train")
-    train_takes = [data.takes[n] for n in data.split.train]
+    seg_train: dict[tuple, list[Transition]] = {}
+    for t in data.items("train"):
+        seg_train.setdefault((t.take, t.start, t.length), []).append(t)
+    train_takes = ([data.takes[n] for n in data.split.train] if config.windows_per_epoch > 0
+                   else [])
     val_items = data.items("val") + [w for n in data.split.val for L in config.val_window_lengths
                                      for w in fixed_windows(data.takes[n], L, stride=45)]
     if not seg_train and config.windows_per_epoch <= 0:
@@ -184,7 +237,8 @@ def train(data: Prepared, config: TrainConfig, *, progress: Progress | None = No
     t0 = time.perf_counter()
     for epoch in range(1, config.epochs + 1):
         model.train()
-        items = list(seg_train)
+        # every transition once per epoch, in one of its gap-filling variants (seed 000's ×3)
+        items = [v[int(rng.integers(len(v)))] for v in seg_train.values()]
         per_take = config.windows_per_epoch // max(len(train_takes), 1)
         for tk in train_takes:
             items += random_windows(tk, per_take, rng, lengths=config.window_lengths)
@@ -210,6 +264,9 @@ def train(data: Prepared, config: TrainConfig, *, progress: Progress | None = No
         log.info("epoch %d: train %.5f val %.5f", epoch, rec["train"], vl)
         if progress:
             progress(epoch, config.epochs, rec)
+        if config.patience and epoch - best_epoch >= config.patience:
+            log.info("converged: no better validation for %d epochs", config.patience)
+            break
     model.load_state_dict(best_state)
     return {
         "kind": config.model,
@@ -244,7 +301,8 @@ def save_checkpoint(ckpt: dict, path: str | os.PathLike, *, half: bool = False) 
 
 
 def load_model(path: str | os.PathLike):
-    """A model from a checkpoint (eval mode, float32); ``model.checkpoint`` keeps the rest."""
+    """A model from a checkpoint file (eval mode, float32); ``model.checkpoint`` keeps the
+    rest of the checkpoint."""
     import torch
 
     p = Path(path)
@@ -253,15 +311,21 @@ def load_model(path: str | os.PathLike):
                         "transitions --data DIR -o model.pt')")
     try:
         ck = torch.load(p, map_location="cpu", weights_only=False)
-        cfg = dict(ck["config"])
-        cfg.pop("n_channels", None)
-        if "noise_fade" in cfg:
-            cfg["noise_fade"] = tuple(cfg["noise_fade"])
-        model = _build(ck["kind"], len(ck["channels"]), cfg)
-        model.load_state_dict({k: v.float() if v.is_floating_point() else v
-                               for k, v in ck["state_dict"].items()})
-    except (KeyError, RuntimeError, OSError, ValueError) as e:
+        return load_state(ck)
+    except (KeyError, RuntimeError, OSError, ValueError, TypeError) as e:
         raise DataError(f"{p}: not a mimika transition checkpoint ({e})") from None
+
+
+def load_state(ck: dict):
+    """A model from a checkpoint dict (as :func:`train` returns it)."""
+    cfg = dict(ck["config"])
+    cfg.pop("n_channels", None)
+    for k in ("noise_fade", "channels"):
+        if k in cfg:
+            cfg[k] = tuple(cfg[k])
+    model = _build(ck["kind"], len(ck["channels"]), cfg)
+    model.load_state_dict({k: v.float() if v.is_floating_point() else v
+                           for k, v in ck["state_dict"].items()})
     model.eval()
     model.checkpoint = {k: v for k, v in ck.items() if k != "state_dict"}
     return model
@@ -282,3 +346,20 @@ def generate(model, window: np.ndarray, target: np.ndarray, length: int) -> np.n
     with torch.no_grad():
         out = model(w, g, int(length), n).numpy().astype(np.float32)
     return out[0] if single else out
+
+
+def validate(model, data: Prepared) -> dict | None:
+    """The validation record of ``model`` on ``data``'s validation transitions against the
+    interpolation baselines (None without validation transitions); see
+    :func:`mimika.learn.protocol.validation_record`."""
+    from mimika.learn.evaluate import baseline_generator, model_generator
+    from mimika.learn.protocol import score_items, validation_record
+
+    items = data.items("val")
+    if not items:
+        return None
+    gens = {b: (baseline_generator(b), False) for b in ("linear", "cosine", "hermite")}
+    gens["model"] = (model_generator(model), True)
+    res = score_items(items, gens, baselines=("linear", "cosine", "hermite"))
+    return validation_record(res, "model", source="validation takes "
+                             + ", ".join(data.split.val))

@@ -4,7 +4,11 @@ An *easing* is a curve ``f: [0, 1] → [0, 1]`` with ``f(0) = 0`` and ``f(1) = 1
 progress of a transition (linear, cosine, smoothstep are built in; seed 002 Ch. 3 found cosine
 "superior" to linear, so it is the default). An :class:`Interpolator` is the general form: it gets
 both AU vectors and the progress and returns whole frames — the hook a learned transition model
-(seed 000's LSTM) plugs into with :func:`register_interpolator`.
+plugs into with :func:`register_interpolator`.
+
+This module is the registry only: it never imports the layers above it. Plug-ins register from
+above — ``import mimika.learn`` registers the ``learned`` easing, and the command line (and
+batch workers) do so at start-up through :func:`mimika.plugins.load_plugins`.
 
 >>> ease = get_interpolator("cosine")
 >>> ease(np.zeros(1), np.ones(1), np.array([0.0, 0.5, 1.0]), channels=("AU12",), duration=1.0)
@@ -133,13 +137,13 @@ def easing_names() -> tuple[str, ...]:
 def get_interpolator(name: str) -> Interpolator:
     """The interpolator registered as ``name``; unknown names raise with suggestions."""
     key = str(name).strip().lower()
-    if key == "learned" and key not in _REGISTRY:
-        import mimika.learn  # noqa: F401  registers the learned transition model (torch on use)
     if key in _REGISTRY:
         return _REGISTRY[key]
     close = difflib.get_close_matches(key, list(_REGISTRY), n=3)
     hint = f"; did you mean {', '.join(close)}?" if close else ""
-    raise ParameterError(f"unknown easing {name!r}{hint} (known: {', '.join(_REGISTRY)})")
+    raise ParameterError(f"unknown easing {name!r}{hint} (known: {', '.join(_REGISTRY)}; "
+                         "plug-ins register when imported, e.g. 'learned' with import "
+                         "mimika.learn — the mimika command does this itself)")
 
 
 def check_easing(name: str) -> str:

@@ -1,0 +1,106 @@
+"""The default controller (Wasserstein auto-encoder): a curved face manifold a PCA of the
+same size cannot follow, and the shipped model's sliders."""
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from mimika.learn.controller import Controller  # noqa: E402
+from mimika.learn.wae import WAEConfig, train_wae, wae_state  # noqa: E402
+
+K = 20
+
+
+def ring(n, seed):
+    """Frames on a curved 2-D manifold: each AU is a rectified cosine of one angle (each AU
+    peaks at its own phase), scaled by an intensity — strong, sparse peaks."""
+    rng = np.random.default_rng(seed)
+    theta = rng.uniform(0, 2 * np.pi, n)
+    r = rng.uniform(0.5, 1.0, n)
+    phase = np.linspace(0, 2 * np.pi, K, endpoint=False)
+    x = r[:, None] * np.maximum(np.cos(theta[:, None] - phase[None]), 0) ** 3
+    return x.astype(np.float32), theta, r
+
+
+def pca2(train, test):
+    mu = train.mean(0)
+    V = np.linalg.svd(train - mu, full_matrices=False)[2][:2]
+    return np.clip(mu + (test - mu) @ V.T @ V, 0, 1)
+
+
+@pytest.fixture(scope="module")
+def ring_model():
+    train, _, _ = ring(3000, 0)
+    torch.set_num_threads(1)
+    res = train_wae(train, WAEConfig(latent_dim=2, hidden=64, iters=1500, batch=128))
+    return train, Controller(wae_state(res, channels=tuple(f"AU{k:02d}" for k in range(K)),
+                                       fps=30.0))
+
+
+def test_wae_follows_a_curved_manifold_a_pca_cannot(ring_model):
+    train, c = ring_model
+    test = ring(300, 1)[0]
+    rec = c.invert_batch(test, steps=100, restarts=2)[1]
+    rmse = np.sqrt(np.mean((rec - test) ** 2))
+    rmse_pca = np.sqrt(np.mean((pca2(train, test) - test) ** 2))
+    assert rmse < 0.5 * rmse_pca
+    peak = test >= 0.9 * test.max(axis=1, keepdims=True)  # each frame's strongest AU
+    assert rec[peak].sum() / test[peak].sum() > 0.9  # strong AUs keep ≥ 90 %
+
+
+def test_wae_starts_from_pca(ring_model):
+    """Before training the decoder of encoded frames is the PCA reconstruction."""
+    train, _ = ring_model
+    res = train_wae(train, WAEConfig(latent_dim=2, hidden=16, iters=1, lr=1e-9))
+    with torch.no_grad():
+        x = torch.from_numpy(train[:50])
+        rec = res.decoder(res.encoder(x)).clamp(0, 1).numpy()
+    np.testing.assert_allclose(rec, pca2(train, train[:50]), atol=1e-4)
+
+
+def test_prior_samples_cover_the_data(ring_model):
+    """MMD: encoded training frames look like N(0, I), so slider settings land on faces."""
+    train, c = ring_model
+    z = c._enc(torch.from_numpy(train)).detach().numpy()
+    assert np.all(np.abs(z.mean(0)) < 0.3) and np.all(np.abs(z.std(0) - 1) < 0.35)
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    return Controller.load()
+
+
+def test_shipped_controller(shipped):
+    c = shipped
+    assert c.kind == "wae" and c.latent_dim == 6 and len(c.channels) == 20
+    assert c.path.name == "controller.pt" and c.path.stat().st_size < 1_000_000
+    z = np.random.default_rng(0).normal(0, 1, (100, 6))
+    faces = c.generate(z)
+    assert faces.min() >= 0 and faces.max() <= 1
+    rec = c.invert_batch(faces[:20], steps=100, restarts=2)[1]
+    spread = np.sqrt(np.mean((faces - faces.mean(0)) ** 2))  # the mean face's error
+    assert np.sqrt(np.mean((rec - faces[:20]) ** 2)) < 0.2 * spread  # its own faces come back
+
+
+def test_every_shipped_slider_changes_the_face_its_own_way(shipped):
+    grid = shipped.traversal((-3.0, 0.0, 3.0))  # (d, 3, K)
+    ends = np.concatenate([grid[:, 0], grid[:, 2]])  # 2d faces at the slider ends
+    move = np.abs(ends - np.concatenate([grid[:, 1], grid[:, 1]])).max(axis=1)
+    # every end moves some AU by ≥ 0.1 from the middle face (a visible change; the shipped
+    # model's weakest end, z2 at +3, moves AU02 by 0.11 — docs/controller.md)
+    assert np.all(move > 0.1)
+    d = np.abs(ends[:, None] - ends[None]).max(axis=2)
+    np.fill_diagonal(d, 1.0)
+    assert d.min() > 0.1  # no two slider ends give the same face
+
+
+def test_shipped_names():
+    from mimika.errors import ParameterError
+
+    assert Controller.load("seed").kind == "wgan"
+    assert Controller.load(conditional=True).kind == "cgan"
+    with pytest.raises(ParameterError, match="shipped"):
+        from mimika.learn.controller import shipped_model
+
+        shipped_model(name="nope")
