@@ -235,22 +235,34 @@ def test_no_skin_pokes_through_the_clothes(character, pose):
 # -- the newsreader's shot ----------------------------------------------------------------------
 
 
-def _news_frame(head, rig, hidden=()):
+def _news_frame(head, rig, hidden=(), pose=None, crop=False):
     from mimika.newsreader.pipeline import news_camera
     from mimika.render import Renderer
     from mimika.render.skin import NEWS_LIGHTING
 
     with Renderer(head, size=(320, 240), samples=0, lighting=NEWS_LIGHTING,
-                  hidden=hidden) as r:
+                  hidden=hidden, crop=crop) as r:
         cam = news_camera(head, "front", 320 / 240)
-        return r.render(rig.deform({}), camera=cam).astype(int), cam
+        img = r.render(rig.deform(pose or {}), camera=cam).astype(int)
+        n_tris = sum(count for o in r._objects for _, _, count, _, _ in o.parts) // 3
+        return img, cam, n_tris
+
+
+@pytest.mark.render
+def test_a_cropped_video_renderer_draws_the_same_shot_without_the_legs(character):
+    head, rig = character
+    pose = {"body.lean_fwd": 1.0, "body.breath": 1.0, "AU53": 1.0, "AU12": 1.0}
+    full, _, n_full = _news_frame(head, rig, pose=pose)
+    cropped, _, n_cropped = _news_frame(head, rig, pose=pose, crop=True)
+    assert np.array_equal(full, cropped)
+    assert n_cropped < 0.7 * n_full, (n_cropped, n_full)
 
 
 @pytest.mark.render
 def test_no_hair_removes_the_hair_above_the_forehead(character):
     head, rig = character
-    full, cam = _news_frame(head, rig)
-    bald, _ = _news_frame(head, rig, hidden=("hair",))
+    full, cam, _ = _news_frame(head, rig)
+    bald, _, _ = _news_frame(head, rig, hidden=("hair",))
     brow = head.landmark_points()[[19, 24]].mean(0)
     x, y = cam.project(np.array([brow, brow + np.array([0, 4.0, 0])]), (320, 240)).astype(int).T
     region = (slice(y[1] - 3, y[1] + 3), slice(x[1] - 6, x[1] + 6))  # 4 cm above the brows
@@ -262,8 +274,8 @@ def test_no_hair_removes_the_hair_above_the_forehead(character):
 @pytest.mark.render
 def test_news_frame_shows_shoulders_in_clothes(character):
     head, rig = character
-    full, cam = _news_frame(head, rig)
-    bare, _ = _news_frame(head, rig, hidden=("clothes",))
+    full, cam, _ = _news_frame(head, rig)
+    bare, _, _ = _news_frame(head, rig, hidden=("clothes",))
     rows = slice(int(0.72 * 240), int(0.85 * 240))  # above the desk
     diff = np.abs(full[rows] - bare[rows]).sum(2) > 30
     cols = np.flatnonzero(diff.any(0))

@@ -38,8 +38,9 @@ def _open(rig: Any, size: tuple[int, int], samples: int, skin: Any, lighting: An
           hidden: Sequence[str] = ()) -> Any:
     from mimika.render import Renderer
 
+    # one camera for the whole track: what lies far outside its view is never drawn
     return Renderer(rig.head, size=size, samples=samples, skin_shader=skin, lighting=lighting,
-                    hidden=hidden)
+                    hidden=hidden, crop=True)
 
 
 def _draw(renderer: Any, rig: Any, values: np.ndarray, channels: Sequence[str],

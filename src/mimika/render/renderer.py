@@ -12,7 +12,7 @@ import json
 import logging
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from typing import Any
 
@@ -287,6 +287,10 @@ class Renderer:
         Lights and backdrop (:class:`mimika.render.skin.Lighting`); default: mimika's look.
     hidden
         Names of objects not to draw (e.g. ``("hair",)``).
+    crop
+        For a fixed shot (a video with one camera): triangles whose rest-pose corners all lie
+        more than a quarter of the image outside the first frame's view are never drawn — a
+        seated newsreader's legs and lower body.
 
     The GL context is created on the first :meth:`render`; ``close()`` (or leaving a
     ``with`` block) frees this renderer's GPU objects.
@@ -294,7 +298,7 @@ class Renderer:
 
     def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4,
                  skin_shader: Any = False, lighting: Any = None,
-                 hidden: Any = ()) -> None:
+                 hidden: Any = (), crop: bool = False) -> None:
         try:
             w, h = (int(s) for s in size)
         except (TypeError, ValueError):
@@ -314,6 +318,7 @@ class Renderer:
             raise ParameterError(f"hidden: head {head.name!r} has no object {unknown[0]!r}; "
                                  f"objects: {', '.join(sorted(names))}")
         self.hidden = frozenset(hidden)
+        self.crop = bool(crop)
         self._skin: Any = None
         self._cameras: dict[str, Camera] = {}
         self._gl: dict[str, Any] | None = None
@@ -350,7 +355,7 @@ class Renderer:
         # the context is shared by every renderer of the process: make it current and keep
         # other threads out while this frame is drawn (GL contexts are not thread-safe)
         with render_lock, ctx:
-            gl = self._setup()
+            gl = self._setup(cam)
             return self._draw(gl, ctx, cam, pos)
 
     def _draw(self, gl: dict, ctx: Any, cam: Camera, pos: dict) -> np.ndarray:
@@ -565,12 +570,12 @@ class Renderer:
         self._set_material(prog, mat, tex, mode)
         return o.vao_for(prog)
 
-    def _setup(self) -> dict[str, Any]:
+    def _setup(self, cam: Camera | None = None) -> dict[str, Any]:
         if self._gl is not None:
             return self._gl
         ctx = get_context()
         try:
-            self._gl = self._create(ctx)
+            self._gl = self._create(ctx, cam if self.crop else None)
         except RenderError:
             raise
         except Exception as exc:
@@ -578,7 +583,7 @@ class Renderer:
             raise RenderError(f"setting up OpenGL objects failed: {exc}") from exc
         return self._gl
 
-    def _create(self, ctx: Any) -> dict[str, Any]:
+    def _create(self, ctx: Any, crop: Camera | None = None) -> dict[str, Any]:
         gl: dict[str, Any] = {"ctx": ctx, "attachments": []}
         gl["progs"] = {}
         prog = self._program(gl, False, False)
@@ -621,8 +626,10 @@ class Renderer:
             gl["attachments"].append(depth)
             gl["fbo"] = gl["resolve"] = ctx.framebuffer(resolve_color, depth)
 
-        self._objects = [_GpuObject(ctx, prog, o) for o in self.head.objects
-                         if o.parts and o.name not in self.hidden]
+        shown = [o for o in self.head.objects if o.name not in self.hidden]
+        if crop is not None:
+            shown = [_in_shot(o, crop, self.size) for o in shown]
+        self._objects = [_GpuObject(ctx, prog, o) for o in shown if o.parts]
         if self.skin_shader:
             from mimika.render.skin import DEFAULT_LIGHTING, SkinShader
 
@@ -642,6 +649,19 @@ class Renderer:
             samples,
         )
         return gl
+
+
+def _in_shot(obj: MeshObject, cam: Camera, size: tuple[int, int]) -> MeshObject:
+    """``obj`` without the triangles whose rest-pose corners all lie more than a quarter of
+    the image outside ``cam``'s view (corners behind the camera count as in view)."""
+    w, h = size
+    clip = np.c_[obj.vertices, np.ones(obj.n_vertices)] @ (
+        cam.projection_matrix @ cam.view_matrix).T
+    px = cam.project(obj.vertices, size)
+    out = (clip[:, 3] > 0) & ((px[:, 0] < -w / 4) | (px[:, 0] > 1.25 * w)
+                              | (px[:, 1] < -h / 4) | (px[:, 1] > 1.25 * h))
+    parts = (replace(p, faces=p.faces[~out[p.faces].all(axis=1)]) for p in obj.parts)
+    return replace(obj, parts=tuple(p for p in parts if len(p.faces)))
 
 
 def _unit(v: tuple[float, float, float]) -> tuple[float, float, float]:
