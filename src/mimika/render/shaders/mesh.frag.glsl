@@ -128,9 +128,15 @@ void main() {
     vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);
     vec3 t = up - dot(up, n) * n;
     float defined = smoothstep(0.15, 0.5, length(t));
-    vec3 sk = mix(vec3(specular(n, v, u_key_dir)), hair_specular(n, v, u_key_dir, t), defined);
-    vec3 sf = mix(vec3(specular(n, v, u_fill_dir)), hair_specular(n, v, u_fill_dir, t),
-                  defined);
+    vec3 sk = vec3(0.0), sf = vec3(0.0);
+    if (defined < 1.0) {  // the crown, where strands converge: the standard highlight
+        sk = vec3(specular(n, v, u_key_dir)) * (1.0 - defined);
+        sf = vec3(specular(n, v, u_fill_dir)) * (1.0 - defined);
+    }
+    if (defined > 0.0) {  // elsewhere strand highlights (each branch is skipped per block)
+        sk += hair_specular(n, v, u_key_dir, t) * defined;
+        sf += hair_specular(n, v, u_fill_dir, t) * defined;
+    }
 #else
     vec3 sk = vec3(specular(n, v, u_key_dir));
     vec3 sf = vec3(specular(n, v, u_fill_dir));
