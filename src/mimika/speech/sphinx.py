@@ -121,7 +121,7 @@ def _dict_word(dec: Any, token: Token, lang: str) -> str:
         pron = "SIL"
     name = "w" + hashlib.sha1(pron.encode()).hexdigest()[:12]
     if dec.lookup_word(name) is None:
-        dec.add_word(name, pron, True)
+        dec.add_word(name, pron, False)  # the alignment search is built afterwards
     return name
 
 
