@@ -165,14 +165,19 @@ def register(sub) -> None:
     c.set_defaults(func=train_controller_command)
 
 
-def train_controller_command(args: argparse.Namespace) -> int:
-    """``mimika train controller``: train the WAE controller and save its checkpoint."""
+def _check_training(args: argparse.Namespace, *counts: str) -> None:
+    """A ``.pt`` output and counts of at least 1 (those given) for the train commands."""
     if not args.output.lower().endswith(".pt"):
         raise ParameterError(f"output {args.output!r} must be a .pt file")
-    for name in ("latent", "iters"):
+    for name in counts:
         v = getattr(args, name)
         if v is not None and v < 1:
-            raise ParameterError(f"--{name} {v} must be ≥ 1")
+            raise ParameterError(f"--{name.replace('_', '-')} {v} must be ≥ 1")
+
+
+def train_controller_command(args: argparse.Namespace) -> int:
+    """``mimika train controller``: train the WAE controller and save its checkpoint."""
+    _check_training(args, "latent", "iters")
     try:
         from mimika.learn.wae import train_from_takes
         from mimika.learn.wgan import save_checkpoint
@@ -221,12 +226,7 @@ def train_gan_command(args: argparse.Namespace) -> int:
     from mimika.learn.controller import train_controller
     from mimika.learn.wgan import save_checkpoint
 
-    if not args.output.lower().endswith(".pt"):
-        raise ParameterError(f"output {args.output!r} must be a .pt file")
-    for name in ("latent", "n_critic", "iters", "encoder_steps"):
-        v = getattr(args, name)
-        if v is not None and v < 1:
-            raise ParameterError(f"--{name.replace('_', '-')} {v} must be ≥ 1")
+    _check_training(args, "latent", "n_critic", "iters", "encoder_steps")
     if args.classifier is not None and (args.classifier < 0 or not args.conditional):
         raise ParameterError(f"--classifier {args.classifier} needs --conditional and must "
                              "be ≥ 0")

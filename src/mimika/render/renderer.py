@@ -654,12 +654,11 @@ class Renderer:
 def _in_shot(obj: MeshObject, cam: Camera, size: tuple[int, int]) -> MeshObject:
     """``obj`` without the triangles whose rest-pose corners all lie more than a quarter of
     the image outside ``cam``'s view (corners behind the camera count as in view)."""
-    w, h = size
     clip = np.c_[obj.vertices, np.ones(obj.n_vertices)] @ (
         cam.projection_matrix @ cam.view_matrix).T
-    px = cam.project(obj.vertices, size)
-    out = (clip[:, 3] > 0) & ((px[:, 0] < -w / 4) | (px[:, 0] > 1.25 * w)
-                              | (px[:, 1] < -h / 4) | (px[:, 1] > 1.25 * h))
+    ndc = clip[:, :2] / np.where(clip[:, 3:] > 0, clip[:, 3:], 1.0)
+    # a quarter of the image beyond each edge is 1.5 in normalised device coordinates
+    out = (clip[:, 3] > 0) & (np.abs(ndc) > 1.5).any(axis=1)
     parts = (replace(p, faces=p.faces[~out[p.faces].all(axis=1)]) for p in obj.parts)
     return replace(obj, parts=tuple(p for p in parts if len(p.faces)))
 

@@ -102,6 +102,16 @@ def _lang_overrides(lang: str) -> dict[str, Any]:
     return out
 
 
+def strip_stress(sym: str) -> tuple[str, int]:
+    """An espeak-ng phoneme without its stress marks, and the stress (2 primary, 1 secondary,
+    0 none)."""
+    stress = 0
+    while sym and sym[0] in "',%=":
+        stress = max(stress, 2 if sym[0] == "'" else 1 if sym[0] == "," else 0)
+        sym = sym[1:]
+    return sym, stress
+
+
 def classify(symbol: str, lang: str = "en") -> tuple[str, ...]:
     """Phoneme classes of one espeak mnemonic (one class, or several for diphthongs).
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from mimika.errors import ParameterError
 from mimika.limits import check_speech
+from mimika.speech.phonemes import strip_stress
 from mimika.speech.utterance import Phone, Sentence, Utterance, Word
 
 log = logging.getLogger(__name__)
@@ -55,14 +56,6 @@ def split_sentences(text: str) -> list[tuple[str, int]]:
     return out
 
 
-def _strip_stress(sym: str) -> tuple[str, int]:
-    stress = 0
-    while sym and sym[0] in "',%=":
-        stress = max(stress, 2 if sym[0] == "'" else 1 if sym[0] == "," else 0)
-        sym = sym[1:]
-    return sym, stress
-
-
 def events_to_phones(events, *, n_samples: int, sr: int, t0: float = 0.0) -> list[Phone]:
     """Turn raw espeak phoneme events into phones tiling the audio (times offset by ``t0`` s).
 
@@ -75,7 +68,7 @@ def events_to_phones(events, *, n_samples: int, sr: int, t0: float = 0.0) -> lis
     starts: list[tuple[int, str, int]] = []
     for typ, _tpos, _length, sample, payload in events:
         if typ == EV_PHONEME:
-            sym, stress = _strip_stress(str(payload))
+            sym, stress = strip_stress(str(payload))
             if not sym or (sym.startswith("(") and sym.endswith(")")):
                 continue  # language-switch markers such as "(en)"
             if sym.startswith("_"):

@@ -20,6 +20,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from mimika.speech.phonemes import strip_stress
 from mimika.speech.utterance import Phone, Word
 
 #: characters stripped from the ends of a whitespace-separated token
@@ -85,14 +86,6 @@ def as_read(text: str) -> str:
     return _CURRENCY.sub(r"\2 \1", text)
 
 
-def _strip(sym: str) -> tuple[str, int]:
-    stress = 0
-    while sym and sym[0] in "',%=":
-        stress = max(stress, 2 if sym[0] == "'" else 1 if sym[0] == "," else 0)
-        sym = sym[1:]
-    return sym, stress
-
-
 @functools.lru_cache(maxsize=4096)
 def _phonemize_cached(text: str, lang: str) -> tuple[tuple[str, int], ...]:
     from mimika.speech import espeak
@@ -101,7 +94,7 @@ def _phonemize_cached(text: str, lang: str) -> tuple[tuple[str, int], ...]:
     for chunk in espeak.text_to_phonemes(text, lang=lang):
         for word in chunk.split():
             for raw in word.split("|"):
-                sym, stress = _strip(raw)
+                sym, stress = strip_stress(raw)
                 if sym and not sym.startswith("_") and not (sym[0] == "(" and sym[-1] == ")"):
                     out.append((sym, stress))
     return tuple(out)
