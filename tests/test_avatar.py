@@ -436,3 +436,50 @@ def test_studio_and_batch_take_a_character_file(tmp_path, builtin_glb):
     st = StudioState(tmp_path / "projects", head=str(builtin_glb))
     glb, _ = st.glb()
     assert glb[:4] == b"glTF" and "AU12" in st.rig().supported
+
+
+def test_frame_keeps_up_for_a_face_whose_mouth_is_far_in_front_of_its_eyes():
+    """An upright face whose mouth opening lies 27° in front of its eyes' line (MakeHuman's
+    amara without clothes) is not tilted; a head pitched by 60° still is set upright."""
+    from mimika.face.rigging.features import FaceFeatures
+    from mimika.face.rigging.frame import _exact
+
+    def feat(r):
+        pts = np.array([[3.0, 3.2, 8.2], [-3.0, 3.2, 8.2], [0.0, -2.5, 11.2]]) @ r.T
+        return FaceFeatures(*pts, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), 0.9)
+
+    assert np.allclose(_exact(feat(np.eye(3))), np.eye(3), atol=1e-9)
+    a = np.radians(60)
+    pitch = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+    up = _exact(feat(pitch)) @ pitch  # the head as the frame leaves it
+    tilt = np.degrees(np.arccos(np.clip(np.trace(up) / 2 - 0.5, -1, 1)))
+    assert tilt < 20  # within the spread of faces' lean, not 60°
+
+
+def test_rig_style_makehuman_gives_other_shapes_that_act_alike(rigged, tmp_path):
+    """``mimika rig --style makehuman``: fields fitted on MakeHuman's faceunits; the smile
+    still lifts both corners outwards and AU01 the inner brows, but the shapes are MakeHuman's
+    artist's, not the ICT scans'."""
+    src = Path(rigged).with_name("face.obj")
+    out = tmp_path / "mh.glb"
+    assert main(["rig", str(src), "-o", str(out), "--style", "makehuman", "--quiet"]) == 0
+    brows = {}
+    for style, path in (("ict", rigged), ("makehuman", out)):
+        head, rig = load_head(path)
+        lm0 = head.landmark_points()
+        d = head.landmark_points(rig.deform({"AU12": 1.0})) - lm0
+        assert d[54, 0] > 0.05 and d[48, 0] < -0.05 and min(d[54, 1], d[48, 1]) > 0.1, style
+        brows[style] = rig.deform({"AU01": 1.0})["skin"] - head.rest["skin"]
+        assert (head.landmark_points(rig.deform({"AU01": 1.0})) - lm0)[[21, 22], 1].min() > 0.1
+    diff = np.linalg.norm(brows["ict"] - brows["makehuman"]) / np.linalg.norm(brows["ict"])
+    assert diff > 0.2, diff
+
+
+def test_rig_styles_match_the_shipped_field_sets():
+    from mimika.commands.avatar import STYLES
+    from mimika.face.rigging import generate
+
+    assert STYLES == generate.STYLES
+    for style in STYLES:
+        assert {"jawOpen", "eyeBlink_L", "mouthSmile_R", "browInnerUp", "cheekPuff"} <= set(
+            generate.available(style))

@@ -8,6 +8,8 @@ from pathlib import Path
 
 from mimika.errors import ParameterError
 
+STYLES = ("ict", "makehuman")  #: mimika.face.rigging.generate.STYLES (kept light for --help)
+
 
 def cmd_rig(args: argparse.Namespace) -> int:
     from mimika.face.rigging.autorig import rig_mesh
@@ -16,7 +18,7 @@ def cmd_rig(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in (".glb", ".gltf"):
         raise ParameterError(f"output {str(out)!r} must end in .glb or .gltf")
-    r = rig_mesh(args.mesh, landmarks=args.landmarks)
+    r = rig_mesh(args.mesh, landmarks=args.landmarks, style=args.style)
     path, arkit = write_rigged(out, r.rig, arkit_shapes(r.shapes))
     head = r.head
     aus = [c for c in r.rig.supported if len(c) == 4]
@@ -28,8 +30,8 @@ def cmd_rig(args: argparse.Namespace) -> int:
               f" one-sided), {len(arkit)} ARKit shapes in {sum(r.seconds.values()):.1f} s")
         missing = [a for a in ("tongueOut",) if a not in arkit]
         if missing:
-            print(f"not generated: {', '.join(missing)} (no fitted field: the ICT scans have no "
-                  "tongue shape)")
+            print(f"not generated: {', '.join(missing)} (no fitted field: neither the ICT scans "
+                  "nor the MakeHuman faceunits move a tongue)")
     return 0
 
 
@@ -66,5 +68,9 @@ def register(sub) -> None:
     r.add_argument("-o", "--output", required=True, help="the rigged .glb (or .gltf)")
     r.add_argument("--landmarks", help="JSON with eye_L, eye_R and mouth [x, y, z] in the "
                    "mesh's coordinates, for faces whose eyes and mouth are not found")
+    r.add_argument("--style", choices=STYLES, default="ict",
+                   help="whose shapes the fields were fitted on: ict (light-stage scans of an "
+                   "actor, strong; default) or makehuman (artist-made faceunits, about half "
+                   "as strong)")
     r.add_argument("-q", "--quiet", action="store_true", help="print nothing")
     r.set_defaults(func=cmd_rig)

@@ -174,8 +174,6 @@ class _Setup:
     rest: np.ndarray
     off: dict[str, int]
     in_face: np.ndarray
-    lo: int
-    hi: int
     upper: dict[str, np.ndarray]
     teeth_names: list[str]
     teeth_rest: np.ndarray
@@ -183,23 +181,30 @@ class _Setup:
     scale: float
 
 
-def _setup(head: Head, jaw_skin: np.ndarray, opt: FitOptions, what: str) -> _Setup:
+def _setup(head: Head, jaw_skin: np.ndarray, opt: FitOptions, what: str,
+           face: np.ndarray | None = None, source: str = "ict") -> _Setup:
     """Frame (landmark centroid and rms radius), mouth split refined on the jaw-open skin
-    positions ``jaw_skin``, eye split (rich), and the vertex sets of the ICT ``head``."""
+    positions ``jaw_skin``, eye split (rich), and the vertex sets of ``head`` (ICT by default;
+    ``face``: which skin vertices are the face, default the ICT face range; ``source``: the
+    head's name in the document)."""
+    if face is None:
+        face = np.zeros(head["skin"].n_vertices, bool)
+        face[FACE_RANGE[0]:FACE_RANGE[1]] = True
     lm = head.landmark_points().astype(float)
     origin = lm.mean(0)
     scale = float(np.sqrt(((lm - origin) ** 2).sum(1).mean()))
-    jaw = jaw_skin[FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
-    face_v = head["skin"].vertices[FACE_RANGE[0]:FACE_RANGE[1]].astype(float)
+    jaw = jaw_skin[face].astype(float)
+    face_v = head["skin"].vertices[face].astype(float)
     normal, offsets, _ = refine_mouth_split(lm, face_v, jaw - face_v)
     split = mouth_split(lm, normal, offsets)
+    shapes = "the ICT Face Model Light shapes" if source == "ict" else f"{source}'s shapes"
     doc: dict = {
-        "format": "mimika-fields", "version": 1, "head": "ict",
-        "description": f"Fitted to the ICT Face Model Light shapes by 'mimika fit' "
+        "format": "mimika-fields", "version": 1, "head": source,
+        "description": f"Fitted to {shapes} by 'mimika fit' "
                        f"(family {opt.family}, seed 002 Eq 4.8/4.9{what}).",
         "frame": {"origin": np.round(origin, 6).tolist(), "scale": round(scale, 6)},
         "splits": {"mouth": split},
-        "source": {"head": "ict", "landmarks": np.round(lm, 5).tolist(),
+        "source": {"head": source, "landmarks": np.round(lm, 5).tolist(),
                    "mouth_split": {"normal": np.round(normal, 8).tolist(),
                                    "offsets": np.round(offsets, 6).tolist()},
                    "fit": {"family": opt.family, "seed": opt.seed}},
@@ -214,16 +219,16 @@ def _setup(head: Head, jaw_skin: np.ndarray, opt: FitOptions, what: str) -> _Set
     rest = np.concatenate([head[n].vertices for n in face_names]).astype(float)
     off = {n: int(o) for n, o in zip(face_names, np.cumsum(
         [0] + [head[n].n_vertices for n in face_names]), strict=False)}
-    lo, hi = off["skin"] + FACE_RANGE[0], off["skin"] + FACE_RANGE[1]
     in_face = np.zeros(len(rest), bool)
-    in_face[lo:hi] = True
+    in_face[off["skin"]:off["skin"] + len(face)] = face
     upper = {name: sp.upper_weight(rest) for name, sp in probe.splits.items()}
     teeth_names = [o.name for o in head.objects if o.category == "teeth"]
-    teeth_rest = np.concatenate([head[n].vertices for n in teeth_names]).astype(float)
+    teeth_rest = np.concatenate([np.zeros((0, 3))] + [head[n].vertices for n in teeth_names]
+                                ).astype(float)
     fit_kw = dict(family=opt.family, sigma_min=opt.sigma_min_cm / scale,
                   psi_evals=opt.psi_evals, phi_evals=opt.phi_evals,
                   rbf_centers=opt.rbf_centers, rbf_ridge=opt.rbf_ridge)
-    return _Setup(head, doc, opt, face_names, rest, off, in_face, lo, hi, upper, teeth_names,
+    return _Setup(head, doc, opt, face_names, rest, off, in_face, upper, teeth_names,
                   teeth_rest, fit_kw, scale)
 
 
@@ -238,7 +243,7 @@ def _fit_objects(st: _Setup, pos: Mapping[str, np.ndarray], rng: np.random.Gener
     disp = np.concatenate([pos[n] for n in st.face_names]).astype(float) - rest
     measured[key] = disp[st.off["skin"]:st.off["skin"] + head["skin"].n_vertices]
     mag = np.linalg.norm(disp, axis=1)
-    thr = max(opt.moving_min_cm, opt.moving_fraction * float(mag[st.lo:st.hi].max()))
+    thr = max(opt.moving_min_cm, opt.moving_fraction * float(mag[st.in_face].max()))
     moves = mag >= thr
     mov = np.flatnonzero(moves & st.in_face)
     perm = rng.permutation(mov)

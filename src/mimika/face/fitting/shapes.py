@@ -16,6 +16,7 @@ import time
 import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,11 +29,17 @@ from mimika.face.fitting.ict import (
     _setup,
     accuracy_rows,
 )
+from mimika.face.head import Head
+from mimika.face.rigs.blendshape import ShapeSet
 from mimika.face.rigs.field import FieldSet, _field_from_json, parse_fields
+
+if TYPE_CHECKING:
+    from mimika.face.makehuman.character_file import Character
 
 log = logging.getLogger(__name__)
 
-__all__ = ["fit_ict_shapes", "shape_fields", "shape_split"]
+__all__ = ["fit_character_shapes", "fit_ict_shapes", "fit_shapes", "shape_fields",
+           "shape_split"]
 
 
 def shape_split(name: str, lid_split: bool) -> str | None:
@@ -52,21 +59,59 @@ def fit_ict_shapes(path: str | None = None, names: Sequence[str] | None = None,
     subset (default all). Accuracy rows (held-out skin vertices) are keyed by shape name."""
     from mimika.face.heads.ict import load_ict
 
+    head, shapes = load_ict(path)
+    return fit_shapes(head, shapes, names, options, progress)
+
+
+def character_face(head: Head) -> np.ndarray:
+    """The face of a MakeHuman character's skin: above the chin's level less 1 cm, in front
+    of the eyes' centres less 6 cm (what the ICT face range is on the ICT head)."""
+    v = head["skin"].vertices
+    a = head.anchors
+    eye_z = (a["eye_L"][2] + a["eye_R"][2]) / 2
+    return (v[:, 1] > a["chin"][1] - 1.0) & (v[:, 2] > eye_z - 6.0)
+
+
+def fit_character_shapes(character: str | Character = "base",
+                         names: Sequence[str] | None = None,
+                         options: FitOptions | None = None,
+                         progress: Progress | None = None) -> FitResult:
+    """Fit one field per MakeHuman faceunit (ARKit 52 but ``tongueOut``, named as the AU
+    tables name them: ``browDown_L`` …) on a character's skin; ``"base"``: MakeHuman's
+    average person without hair or clothes."""
+    from mimika.face.heads.character import character_shapes
+    from mimika.face.makehuman.character_file import character_from_dict
+
+    if character == "base":
+        character = character_from_dict({"name": "makehuman", "hair": "none", "clothes": []},
+                                        "makehuman base")
+    head, shapes = character_shapes(character)
+    keep = [n for n in shapes.names if n != "tongueOut"]
+    return fit_shapes(head, shapes, keep if names is None else names, options, progress,
+                      face=character_face(head), source="makehuman")
+
+
+def fit_shapes(head: Head, shapes: ShapeSet, names: Sequence[str] | None = None,
+               options: FitOptions | None = None, progress: Progress | None = None, *,
+               face: np.ndarray | None = None, source: str = "ict") -> FitResult:
+    """One field per shape of ``shapes`` on ``head`` (``face``: its face vertices, default
+    the ICT face range)."""
     opt = options or FitOptions(family="rich")
     t_start = time.perf_counter()
-    head, shapes = load_ict(path)
     avail = list(shapes.names)
     todo = list(avail) if names is None else list(dict.fromkeys(names))
     bad = [n for n in todo if n not in avail]
     if bad:
-        raise ParameterError(f"no ICT shape named {', '.join(bad)}; shapes: {', '.join(avail)}")
+        raise ParameterError(f"no {source} shape named {', '.join(bad)}; shapes: "
+                             f"{', '.join(avail)}")
     rest = head.rest
 
     def pose(k: int) -> dict[str, np.ndarray]:
         return {o: rest[o] + shapes.deltas[o][k] if o in shapes.deltas else rest[o]
                 for o in rest}
 
-    st = _setup(head, pose(avail.index("jawOpen"))["skin"], opt, ", one field per shape")
+    st = _setup(head, pose(avail.index("jawOpen"))["skin"], opt, ", one field per shape",
+                face, source)
     doc = st.doc
     doc["shapes"] = {}
     heldout: dict[str, np.ndarray] = {}

@@ -87,13 +87,33 @@ def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, S
     desc = character.description or f"MakeHuman character {character.name!r}"
     head = Head(character.name, tuple(posed_objs), lm, a, description=desc, meta=meta)
     bind_head = Head(character.name, tuple(bind_objs), lm, a, description=desc, meta=meta)
-    names = tuple(arkit_to_table_name(n) for n in built.shape_names)
-    shapes = ShapeSet(names, {k: v * scale for k, v in built.deltas.items()})
+    shapes = _shape_set(built, scale)
     table = load_table("makehuman_aus.json")
     skinning = Skinning(sk.names, heads_cm, sk.parents, built.weights,
                         {k: np.asarray(v) for k, v in pose.items()}, table["head_share"],
                         table.get("body", {}))
     return head, SkinnedRig(head, bind_head, shapes, table, skinning)
+
+
+def _shape_set(built: Built, scale: float) -> ShapeSet:
+    """The faceunits as AU-table shape names and head-frame deltas (cm)."""
+    names = tuple(arkit_to_table_name(n) for n in built.shape_names)
+    return ShapeSet(names, {k: v * scale for k, v in built.deltas.items()})
+
+
+def _built(character: Character) -> Built:
+    """The character's geometry, from the cache or built (and cached)."""
+    path = cache.cache_path(character.geometry_key())
+    built = cache.load(path)
+    if built is None:
+        built = build(character.phenotype_values(),
+                      Outfit(character.hair, character.eyebrows, character.eyelashes,
+                             character.clothes))
+        try:
+            cache.save(path, built)
+        except OSError as e:
+            log.warning("cannot cache character %r in %s: %s", character.name, path, e)
+    return built
 
 
 _LOADED: dict[str, tuple[Head, SkinnedRig]] = {}
@@ -105,18 +125,18 @@ def load_character(spec: str) -> tuple[Head, SkinnedRig]:
     character = load_character_spec(spec)
     key = character.key()
     if key not in _LOADED:
-        path = cache.cache_path(character.geometry_key())
-        built = cache.load(path)
-        if built is None:
-            built = build(character.phenotype_values(),
-                          Outfit(character.hair, character.eyebrows, character.eyelashes,
-                                 character.clothes))
-            try:
-                cache.save(path, built)
-            except OSError as e:
-                log.warning("cannot cache character %r in %s: %s", character.name, path, e)
+        built = _built(character)
         if len(_LOADED) >= 4:
             _LOADED.pop(next(iter(_LOADED)))
         _LOADED[key] = assemble(built, character,
                                 lambda piece: parts_of(piece, character))
     return _LOADED[key]
+
+
+def character_shapes(spec: str | Character) -> tuple[Head, ShapeSet]:
+    """The character's head (untextured) and its faceunits as a shape set (per object, cm):
+    what a fit of per-shape fields needs."""
+    character = spec if isinstance(spec, Character) else load_character_spec(spec)
+    built = _built(character)
+    head, _ = assemble(built, character)
+    return head, _shape_set(built, _to_head_frame(built)[0])

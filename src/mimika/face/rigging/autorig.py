@@ -146,8 +146,10 @@ def _classify(pieces: list[_Piece], frame: Frame) -> None:
             pc.category = "teeth"
 
 
-def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None) -> RiggedMesh:
-    """Rig the mesh at ``path`` (see the module doc)."""
+def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: str = "ict"
+             ) -> RiggedMesh:
+    """Rig the mesh at ``path`` (see the module doc); ``style``: whose shapes the fields were
+    fitted on (:data:`~mimika.face.rigging.generate.STYLES`)."""
     from mimika.face.heads.gltf import render_material
 
     t0 = time.perf_counter()
@@ -192,14 +194,14 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None) -> Rigged
         _, lm_idx = cKDTree(skin_v).query(frame.apply(given))
         lm_pts = skin_v[lm_idx]
     else:
-        lm_idx, lm_pts = landmarks68(skin_v, frame.features, template_landmarks())
+        lm_idx, lm_pts = landmarks68(skin_v, frame.features, template_landmarks(style))
     for side, pt in (("eye_L", frame.features.eye_L), ("eye_R", frame.features.eye_R)):
         eyes.setdefault(side, pt - [0.0, 0.0, 1.2])
     head = Head(p.stem, tuple(objs), lm_idx, head_anchors(skin_v, lm_pts, eyes),
                 landmark_object="skin", description=f"rigged by mimika from {p}",
                 meta={"source": str(p), "frame": frame.describe(), "frame_obj": frame})
     t2 = time.perf_counter()
-    shapes = generate_shapes(head)
+    shapes = generate_shapes(head, style=style)
     t3 = time.perf_counter()
     rig, cover = build_rig(head, shapes, {n: f"{n} (fields)" for n in shapes})
     head.meta["coverage"] = cover

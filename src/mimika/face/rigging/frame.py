@@ -84,16 +84,18 @@ def candidate_rotations(kind: str, vrm_version: int | None = None) -> list[np.nd
     return out
 
 
-#: faces lean back: the mouth opening sits this far in front of the eyes' vertical (ICT: 11°)
-FACE_TILT_DEG = 5.0
-#: the mouth overrides the convention's up only when they disagree by more than this
+#: faces lean back: the line from the mouth opening up to the eye openings leans back about
+#: this much from the vertical (measured 1–27° on seven upright heads: ICT 11°, the built-in
+#: head 21°, MakeHuman's base 20°, its presets 1–27°)
+FACE_LEAN_DEG = 15.0
+#: the mouth overrides the convention's up only when its lean is off by more than this
 PITCH_TRUST_DEG = 25.0
 
 
 def _exact(feat: FaceFeatures) -> np.ndarray:
     """The rotation that levels the eyes along x, keeping the current up (pitch) unless the
     mouth says it is off by more than PITCH_TRUST_DEG (then up follows the eyes-to-mouth line,
-    leaning back FACE_TILT_DEG)."""
+    leaning back FACE_LEAN_DEG)."""
     x = feat.eye_L - feat.eye_R
     x /= np.linalg.norm(x)
     y = np.array([0.0, 1.0, 0.0]) - x[1] * x
@@ -101,9 +103,10 @@ def _exact(feat: FaceFeatures) -> np.ndarray:
     m = 0.5 * (feat.eye_L + feat.eye_R) - feat.mouth
     m -= (m @ x) * x
     m /= np.linalg.norm(m)
-    if np.degrees(np.arccos(np.clip(m @ y, -1, 1))) > PITCH_TRUST_DEG:
+    lean = np.degrees(np.arctan2(-(m @ np.cross(x, y)), m @ y))
+    if abs(lean - FACE_LEAN_DEG) > PITCH_TRUST_DEG:
         z = np.cross(x, m)
-        t = np.radians(FACE_TILT_DEG)
+        t = np.radians(FACE_LEAN_DEG)
         y = np.cos(t) * m + np.sin(t) * z
     return np.stack([x, y, np.cross(x, y)])
 

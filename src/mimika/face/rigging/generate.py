@@ -1,7 +1,11 @@
-"""Blendshapes for any face from seed 002's fields: the shipped per-shape fields (fitted on the
-ICT Face Model's 53 expression shapes, ``face/data/ict_shape_fields.json``) are carried to the
-face by its 68 landmarks (:func:`~mimika.face.fitting.transfer.transfer_fields`) and evaluated
-on its vertices."""
+"""Blendshapes for any face from seed 002's fields: per-shape fields fitted on one rig's
+expression shapes are carried to the face by its 68 landmarks
+(:func:`~mimika.face.fitting.transfer.transfer_fields`) and evaluated on its vertices.
+
+Two styles are shipped: ``ict`` (the ICT Face Model's 53 light-stage scans of an actor,
+``face/data/ict_shape_fields.json``, the default) and ``makehuman`` (MakeHuman's 51 artist-made
+ARKit faceunits but ``tongueOut``, ``face/data/makehuman_shape_fields.json``): two rigs' ideas
+of the same ARKit names, which differ by about 2× in strength (docs/avatars.md)."""
 
 from __future__ import annotations
 
@@ -14,14 +18,18 @@ from importlib import resources
 import numpy as np
 from scipy.spatial import cKDTree
 
+from mimika.errors import ParameterError
 from mimika.face.fitting.shapes import shape_fields
 from mimika.face.fitting.splits import similarity_transform
 from mimika.face.fitting.transfer import transfer_fields
 from mimika.face.head import Head
 from mimika.face.rigs.field import FieldSet, LinearField, SplitField
 
-__all__ = ["ARKIT_SUMS", "Shapes", "generate_shapes", "shape_document", "template_landmarks"]
+__all__ = ["ARKIT_SUMS", "STYLES", "Shapes", "available", "generate_shapes", "shape_document",
+           "template_landmarks"]
 
+#: shipped per-shape field sets (``face/data/<style>_shape_fields.json``)
+STYLES = ("ict", "makehuman")
 #: ARKit shapes that are one shape per side in the ICT set: generated as the sum of both
 ARKIT_SUMS = {"browInnerUp": ("browInnerUp_L", "browInnerUp_R"),
               "cheekPuff": ("cheekPuff_L", "cheekPuff_R")}
@@ -30,22 +38,26 @@ Shapes = dict[str, dict[str, np.ndarray]]
 
 
 @functools.cache
-def shape_document() -> dict:
-    """The shipped per-shape fields (``mimika.face.fitting.shapes.fit_ict_shapes``, rich
-    family), as a fields document."""
-    text = resources.files("mimika.face").joinpath("data/ict_shape_fields.json").read_text(
-        "utf-8")
+def shape_document(style: str = "ict") -> dict:
+    """A shipped per-shape fields document (``mimika.face.fitting.shapes``, rich family)."""
+    if style not in STYLES:
+        raise ParameterError(f"unknown shape style {style!r}; styles: {', '.join(STYLES)}")
+    text = resources.files("mimika.face").joinpath(f"data/{style}_shape_fields.json"
+                                                   ).read_text("utf-8")
     return json.loads(text)
 
 
-def template_landmarks() -> np.ndarray:
-    """The 68 landmarks (cm) of the face the shipped fields were fitted on (ICT)."""
-    return np.asarray(shape_document()["source"]["landmarks"], float)
+def template_landmarks(style: str = "ict") -> np.ndarray:
+    """The 68 landmarks (cm) of the face a style's fields were fitted on: the template the
+    landmarks of a new face are placed from, so they follow the same convention."""
+    return np.asarray(shape_document(style)["source"]["landmarks"], float)
 
 
-def available() -> tuple[str, ...]:
-    """Shapes the shipped fields can generate (ICT names, plus the ARKit sums)."""
-    return (*shape_document()["shapes"], *ARKIT_SUMS)
+def available(style: str = "ict") -> tuple[str, ...]:
+    """Shapes a style's fields can generate (AU-table names, plus the ARKit sums)."""
+    have = shape_document(style)["shapes"]
+    return (*have, *(s for s, parts in ARKIT_SUMS.items()
+                     if s not in have and all(p in have for p in parts)))
 
 
 def _support(f: LinearField, eps: float) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -103,16 +115,17 @@ def _rigid(v: np.ndarray, d: np.ndarray) -> np.ndarray:
     return (v - c) @ r.T + c + d.mean(0) - v
 
 
-def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
-    """Deltas of shapes ``names`` (default: all available) on every object of ``head`` that
-    their fields move: face objects per vertex; rigid objects (teeth, tongue) take one side of
-    the mouth split — the side most of their vertices lie on (the FieldRig uses the centroid,
-    which puts long upper teeth below the lips)."""
-    full = shape_document()
+def generate_shapes(head: Head, names: Iterable[str] | None = None, style: str = "ict"
+                    ) -> Shapes:
+    """Deltas of shapes ``names`` (default: all available) of ``style`` on every object of
+    ``head`` that their fields move: face objects per vertex; rigid objects (teeth, tongue)
+    take one side of the mouth split — the side most of their vertices lie on (the FieldRig
+    uses the centroid, which puts long upper teeth below the lips)."""
+    full = shape_document(style)
     # the shapes are in field coordinates: only the frame, splits and source move
     doc = transfer_fields({k: v for k, v in full.items() if k != "shapes"}, head)
     doc["shapes"] = full["shapes"]
-    fs = shape_fields(doc, source="ict_shape_fields.json")
+    fs = shape_fields(doc, source=f"{style}_shape_fields.json")
     eps = 1e-4 / fs.scale  # 1 µm
     upper = {}
     for sname, sp in fs.splits.items():
@@ -122,8 +135,8 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
             # rigid objects (teeth rows, tongue) go whole, by where most of them lies
             upper[sname, o.name] = w if o.category == "face" else np.full(
                 len(v), float(w.mean() > 0.5))
-    want = list(available() if names is None else names)
-    base = {n for w in want for n in ARKIT_SUMS.get(w, (w,))}
+    want = list(available(style) if names is None else names)
+    base = {n for w in want for n in (ARKIT_SUMS.get(w, (w,)) if w not in fs.linear else (w,))}
     out: Shapes = {}
     for name in base:
         if name not in fs.linear:
@@ -142,7 +155,7 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None) -> Shapes:
                 per[o.name] = d
         out[name] = per
     for total, parts in ARKIT_SUMS.items():
-        if total in want:
+        if total in want and total not in fs.linear:
             objs = {k for p in parts for k in out[p]}
             out[total] = {k: sum(out[p].get(k, 0) for p in parts) for k in objs}
     return {n: out[n] for n in want}
