@@ -18,6 +18,8 @@ from pathlib import Path
 
 from mimika.face.fitting.report import report_markdown
 from mimika.face.fitting.shapes import fit_character_shapes, fit_ict_shapes
+from mimika.face.heads.character import base_character, character_shapes
+from mimika.face.rigging.template import face_template
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,7 +28,11 @@ if __name__ == "__main__":
     ap.add_argument("--style", choices=("ict", "makehuman"), default="ict")
     style = ap.parse_args().style
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    res = fit_ict_shapes() if style == "ict" else fit_character_shapes()
+    if style == "ict":
+        res = fit_ict_shapes()
+    else:  # its own template for placing landmarks: openings as found, face surface
+        res = fit_character_shapes()
+        res.document["source"].update(face_template(character_shapes(base_character())[0]))
     out = ROOT / "src" / "mimika" / "face" / "data" / f"{style}_shape_fields.json"
     out.write_text(json.dumps(res.document, separators=(",", ":")))
     report = "accuracy_shapes.md" if style == "ict" else f"accuracy_shapes_{style}.md"

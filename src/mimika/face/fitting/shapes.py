@@ -79,13 +79,9 @@ def fit_character_shapes(character: str | Character = "base",
     """Fit one field per MakeHuman faceunit (ARKit 52 but ``tongueOut``, named as the AU
     tables name them: ``browDown_L`` …) on a character's skin; ``"base"``: MakeHuman's
     average person without hair or clothes."""
-    from mimika.face.heads.character import character_shapes
-    from mimika.face.makehuman.character_file import character_from_dict
+    from mimika.face.heads.character import base_character, character_shapes
 
-    if character == "base":
-        character = character_from_dict({"name": "makehuman", "hair": "none", "clothes": []},
-                                        "makehuman base")
-    head, shapes = character_shapes(character)
+    head, shapes = character_shapes(base_character() if character == "base" else character)
     keep = [n for n in shapes.names if n != "tongueOut"]
     return fit_shapes(head, shapes, keep if names is None else names, options, progress,
                       face=character_face(head), source="makehuman")

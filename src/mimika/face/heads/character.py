@@ -133,6 +133,15 @@ def load_character(spec: str) -> tuple[Head, SkinnedRig]:
     return _LOADED[key]
 
 
+def base_character() -> Character:
+    """MakeHuman's average person without hair or clothes (what the ``makehuman`` shape
+    fields are fitted on)."""
+    from mimika.face.makehuman.character_file import character_from_dict
+
+    return character_from_dict({"name": "makehuman", "hair": "none", "clothes": []},
+                               "makehuman base")
+
+
 def character_shapes(spec: str | Character) -> tuple[Head, ShapeSet]:
     """The character's head (untextured) and its faceunits as a shape set (per object, cm):
     what a fit of per-shape fields needs."""

@@ -28,7 +28,7 @@ from mimika.face.head import Head, MeshObject, Part
 from mimika.face.rigging.assemble import AvatarRig, build_rig, head_anchors
 from mimika.face.rigging.features import find_face, sphere_fit
 from mimika.face.rigging.frame import Frame, detect_frame, frame_from_points
-from mimika.face.rigging.generate import Shapes, generate_shapes, template_landmarks
+from mimika.face.rigging.generate import Shapes, generate_shapes, template
 from mimika.face.rigging.landmarks import landmarks68
 
 log = logging.getLogger(__name__)
@@ -194,7 +194,7 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: st
         _, lm_idx = cKDTree(skin_v).query(frame.apply(given))
         lm_pts = skin_v[lm_idx]
     else:
-        lm_idx, lm_pts = landmarks68(skin_v, frame.features, template_landmarks(style))
+        lm_idx, lm_pts = landmarks68(skin_v, frame.features, **template(style), faces=faces)
     for side, pt in (("eye_L", frame.features.eye_L), ("eye_R", frame.features.eye_R)):
         eyes.setdefault(side, pt - [0.0, 0.0, 1.2])
     head = Head(p.stem, tuple(objs), lm_idx, head_anchors(skin_v, lm_pts, eyes),

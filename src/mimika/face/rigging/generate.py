@@ -26,7 +26,7 @@ from mimika.face.head import Head
 from mimika.face.rigs.field import FieldSet, LinearField, SplitField
 
 __all__ = ["ARKIT_SUMS", "STYLES", "Shapes", "available", "generate_shapes", "shape_document",
-           "template_landmarks"]
+           "template", "template_landmarks"]
 
 #: shipped per-shape field sets (``face/data/<style>_shape_fields.json``)
 STYLES = ("ict", "makehuman")
@@ -51,6 +51,17 @@ def template_landmarks(style: str = "ict") -> np.ndarray:
     """The 68 landmarks (cm) of the face a style's fields were fitted on: the template the
     landmarks of a new face are placed from, so they follow the same convention."""
     return np.asarray(shape_document(style)["source"]["landmarks"], float)
+
+
+def template(style: str = "ict") -> dict:
+    """Everything the landmark placer knows of a style's template face: ``landmarks``, and
+    where present ``openings`` and ``surface`` (:func:`~mimika.face.rigging.template.
+    face_template`)."""
+    src = shape_document(style)["source"]
+    out = {"template": template_landmarks(style), "template_openings": src.get("openings")}
+    if "surface" in src:
+        out["surface"] = np.asarray(src["surface"], float)
+    return out
 
 
 def available(style: str = "ict") -> tuple[str, ...]:

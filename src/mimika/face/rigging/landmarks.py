@@ -5,7 +5,9 @@ file) are mapped onto the face by an axis-wise scaling that matches its eye dist
 drop from the eyes to the mouth (y) and their mean (z), with the eye midpoint on the face's.
 Then the eye contours (36–47) and inner lips (60–67) are fitted to the openings found — each
 template contour scaled to its opening's extent and snapped to the nearest rim point — and every
-landmark moves to the nearest mesh vertex.
+landmark moves to the nearest mesh vertex. A template that knows where the opening finder
+lands on it, and its own face surface, is placed opening to opening and then by ICP instead
+(``mimika rig --style makehuman``).
 """
 
 from __future__ import annotations
@@ -13,7 +15,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from mimika.face.meshgen import vertex_normals
 from mimika.face.rigging.features import FaceFeatures
+from mimika.face.rigging.template import icp_nonrigid, icp_similarity
 
 __all__ = ["landmarks68"]
 
@@ -40,18 +44,40 @@ def _fit_contour(tpl: np.ndarray, rim: np.ndarray, *, snap: bool = True) -> np.n
     return rim[i]
 
 
-def landmarks68(vertices: np.ndarray, feat: FaceFeatures, template: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex indices (68,) and points (68, 3) of the landmarks on ``vertices`` (head frame)."""
+def landmarks68(vertices: np.ndarray, feat: FaceFeatures, template: np.ndarray,
+                template_openings: dict | None = None, surface: np.ndarray | None = None,
+                faces: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex indices (68,) and points (68, 3) of the landmarks on ``vertices`` (head frame).
+    ``template_openings``: where the opening finder lands on the template face itself
+    (``eye_L``, ``eye_R``, ``mouth``); then the template is mapped opening to opening, which
+    cancels the finder's bias on faces like the template (closed lids and lips), and the
+    contours are not snapped to the openings' rims. ``surface``: points of the template's
+    face, mapped the same way and then moved onto ``vertices`` by a similarity ICP — and,
+    with the mesh's ``faces``, bent onto it by a non-rigid one — carrying the landmarks
+    along (:mod:`~mimika.face.rigging.template`)."""
     t = np.asarray(template, float)
-    te_l, te_r = t[_EYE_L].mean(0), t[_EYE_R].mean(0)
-    tm = t[_INNER_LIPS].mean(0)
+    if template_openings is not None:
+        te_l, te_r, tm = (np.asarray(template_openings[k], float)
+                          for k in ("eye_L", "eye_R", "mouth"))
+    else:
+        te_l, te_r = t[_EYE_L].mean(0), t[_EYE_R].mean(0)
+        tm = t[_INNER_LIPS].mean(0)
     tmid = 0.5 * (te_l + te_r)
     mid = 0.5 * (feat.eye_L + feat.eye_R)
     sx = feat.eye_distance / np.linalg.norm(te_l - te_r)
     sy = (mid[1] - feat.mouth[1]) / (tmid[1] - tm[1])
     k = np.array([sx, sy, np.sqrt(abs(sx * sy))])
     p = mid + (t - tmid) * k
+    if template_openings is not None:
+        v = np.asarray(vertices, float)
+        if surface is not None:
+            surf = mid + (np.asarray(surface, float) - tmid) * k
+            sc, r, tr = icp_similarity(surf, v)
+            p, surf = sc * p @ r.T + tr, sc * surf @ r.T + tr
+            if faces is not None:  # then bent onto the face: other proportions
+                p = icp_nonrigid(surf, p, v, vertex_normals(v, faces))
+        _, idx = cKDTree(v).query(p)
+        return idx.astype(np.int64), v[idx]
     # the template's eye centre and mouth land on the openings' own centres
     p[_EYE_L] += feat.eye_L - p[_EYE_L].mean(0)
     p[_EYE_R] += feat.eye_R - p[_EYE_R].mean(0)
