@@ -508,3 +508,33 @@ def test_rig_makehuman_style_finds_a_characters_landmarks(tmp_path):
     inner = slice(17, 68)  # brows, nose, eyes, lips (the jaw line is a convention)
     assert err["makehuman"][inner].mean() < 0.6, err["makehuman"][inner].mean()  # was 1.3
     assert err["makehuman"][inner].mean() < 0.5 * err["ict"][inner].mean()
+
+
+def test_rig_keeps_the_inputs_textures(tmp_path):
+    """A textured glTF face rigged by ``mimika rig`` keeps its base-colour texture: the GLB
+    holds the image, the head loads with it, and its renders show the texture's colours."""
+    from dataclasses import replace
+
+    from mimika.face.head import Head, Texture
+    from mimika.face.rigs.field import FieldRig
+    from mimika.io.gltf import build_gltf, save_gltf
+    from mimika.render import Renderer
+
+    head, rig = load_head("builtin")
+    img = np.zeros((64, 64, 3), np.uint8)
+    img[:, :, 1] = 200  # a green face: nothing else in mimika's materials is green
+    objs = tuple(replace(o, parts=tuple(replace(p, texture=Texture(img, "green"))
+                                        if p.material == "skin" else p for p in o.parts))
+                 if o.name == "skin" else o for o in head.objects)
+    green = Head(head.name, objs, head.landmarks, head.anchors, description="textured")
+    src = tmp_path / "green.glb"
+    save_gltf(src, *build_gltf(FieldRig(green, rig.fields), name="green"))
+    out = tmp_path / "rigged.glb"
+    assert main(["rig", str(src), "-o", str(out), "--quiet"]) == 0
+    rigged, _ = load_head(out)
+    sizes = [p.texture.image.shape[:2] for o in rigged.objects for p in o.parts if p.texture]
+    assert (64, 64) in sizes  # the input's image (untextured materials: 1×1 of their colour)
+    with Renderer(rigged, size=(160, 160)) as ren:
+        px = ren.render(rigged.rest).astype(int)
+    face = px[40:120, 50:110]
+    assert ((face[..., 1] > face[..., 0] + 40) & (face[..., 1] > face[..., 2] + 40)).mean() > 0.3

@@ -34,6 +34,7 @@ tests. ``.glb`` is binary; ``.gltf`` embeds its buffer as a base64 data URI.
 from __future__ import annotations
 
 import base64
+import io
 import json
 import logging
 import os
@@ -46,7 +47,7 @@ import numpy as np
 
 import mimika
 from mimika.errors import ParameterError
-from mimika.face.head import Head
+from mimika.face.head import Head, Part
 from mimika.face.rig import Rig
 from mimika.facs import AU_CATALOGUE
 from mimika.io.atomic import atomic_write
@@ -205,6 +206,78 @@ def _morph_deltas(rig: Rig, codes: tuple[str, ...]) -> dict[str, list[tuple[str,
     return cache[codes]
 
 
+_SKIN_MATERIALS = ("skin", "lips", "skin_body")
+_TWO_SIDED = ("hair", "hair_coily", "brow", "lash", "eyebrow", "eyelash", "cloth", "cornea",
+              "mouth", "socket")
+
+
+def _png(image: np.ndarray, drop_alpha: bool) -> bytes:
+    from PIL import Image
+
+    img = np.asarray(image, np.uint8)
+    if drop_alpha and img.shape[2] == 4:
+        img = img[:, :, :3]
+    buf = io.BytesIO()
+    Image.fromarray(img).save(buf, format="PNG", optimize=False)
+    return buf.getvalue()
+
+
+class _Materials:
+    """glTF materials (+ images, textures) per (material name, texture) of the parts."""
+
+    def __init__(self, b: _Builder) -> None:
+        self.b = b
+        self.src = _materials()
+        self.materials: list[dict] = []
+        self.images: list[dict] = []
+        self.textures: list[dict] = []
+        self._index: dict[tuple, int] = {}
+
+    def get(self, part: Part) -> int:
+        key = (part.material, id(part.texture), part.alpha_mode)
+        if key in self._index:
+            return self._index[key]
+        m = self.src.get(part.material, self.src.get("_default", {"color": "#9a9a9a"}))
+        shin = float(m.get("shininess", 20.0))
+        alpha = float(m.get("alpha", 1.0))
+        pbr: dict[str, Any] = {"baseColorFactor": [*_srgb_to_linear(m["color"]), alpha],
+                               "metallicFactor": 0.0,
+                               "roughnessFactor": round(float(np.sqrt(2.0 / (shin + 2.0))), 4)}
+        out: dict[str, Any] = {"name": part.material, "pbrMetallicRoughness": pbr}
+        if part.texture is not None:
+            data = _png(part.texture.image, part.material in _SKIN_MATERIALS)
+            view = self.b.add_bytes(data)
+            self.images.append({"bufferView": view, "mimeType": "image/png",
+                                "name": part.texture.name or part.material})
+            self.textures.append({"source": len(self.images) - 1, "sampler": 0})
+            pbr["baseColorTexture"] = {"index": len(self.textures) - 1}
+            pbr["baseColorFactor"] = [1.0, 1.0, 1.0, alpha]
+        if part.alpha_mode == "blend" or alpha < 1.0:
+            out["alphaMode"] = "BLEND"
+        elif part.alpha_mode == "mask":
+            out["alphaMode"], out["alphaCutoff"] = "MASK", 0.5
+        if part.material in _TWO_SIDED:
+            out["doubleSided"] = True
+        self.materials.append(out)
+        self._index[key] = len(self.materials) - 1
+        return self._index[key]
+
+
+def _uv_attribute(b: _Builder, uvs: np.ndarray) -> int:
+    """A TEXCOORD_0 accessor (glTF's v grows downward, mimika's upward)."""
+    uv = np.asarray(uvs, np.float32).copy()
+    uv[:, 1] = 1.0 - uv[:, 1]
+    return b.add(uv, "VEC2", _FLOAT, target=_ARRAY)
+
+
+def with_textures(doc: dict, mats: _Materials) -> None:
+    """Add ``mats``' images, textures and their one sampler to ``doc`` (when there are any)."""
+    if mats.textures:
+        doc["images"], doc["textures"] = mats.images, mats.textures
+        doc["samplers"] = [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071,
+                            "wrapT": 33071}]
+
+
 def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = None
                ) -> tuple[dict, bytes]:
     """The glTF JSON document and its binary buffer for ``rig``'s head (+ ``track``)."""
@@ -214,31 +287,9 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
         return build_skinned_gltf(rig, track, name=name)
     head: Head = rig.head
     b = _Builder()
-    mats_src = _materials()
+    mats = _Materials(b)
     motion = rig_motion(rig)
     sup = [c for c in rig.supported if c[:4] not in _HEAD_AUS]
-
-    # materials
-    materials: list[dict] = []
-    mat_index: dict[str, int] = {}
-
-    def material(name_: str) -> int:
-        if name_ in mat_index:
-            return mat_index[name_]
-        m = mats_src.get(name_, mats_src.get("_default", {"color": "#9a9a9a"}))
-        alpha = float(m.get("alpha", 1.0))
-        shin = float(m.get("shininess", 20.0))
-        out = {"name": name_, "pbrMetallicRoughness": {
-            "baseColorFactor": [*_srgb_to_linear(m["color"]), alpha],
-            "metallicFactor": 0.0,
-            "roughnessFactor": round(float(np.sqrt(2.0 / (shin + 2.0))), 4)}}
-        if alpha < 1.0:
-            out["alphaMode"] = "BLEND"
-        if name_ in ("mouth", "socket"):
-            out["doubleSided"] = True
-        materials.append(out)
-        mat_index[name_] = len(materials) - 1
-        return mat_index[name_]
 
     deltas = _morph_deltas(rig, tuple(sup))
 
@@ -270,6 +321,8 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
         f_all = o.faces.astype(np.int64)
         attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
                  "NORMAL": b.add(_normals(v, f_all), "VEC3", _FLOAT, target=_ARRAY)}
+        if o.uvs is not None and any(p.texture is not None for p in o.parts):
+            attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs)
         if not eye:
             w = np.clip(motion["weights"][o.name], 0.0, 1.0)
             # the larger weight first; a joint slot with zero weight holds joint 0
@@ -290,7 +343,7 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
             idx = part.faces.astype(np.uint32).reshape(-1)
             prim = {"attributes": attrs, "indices": b.add(idx, "SCALAR", _UINT,
                                                           target=_ELEMENTS, minmax=True),
-                    "material": material(part.material), "mode": 4}
+                    "material": mats.get(part), "mode": 4}
             if targets:
                 prim["targets"] = targets
             prims.append(prim)
@@ -323,9 +376,10 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
         "asset": {"version": "2.0", "generator": f"mimika {mimika.__version__}"},
         "scene": 0,
         "scenes": [{"name": name or head.name, "nodes": roots}],
-        "nodes": nodes, "meshes": meshes, "materials": materials, "skins": [skin],
+        "nodes": nodes, "meshes": meshes, "materials": mats.materials, "skins": [skin],
         "extras": {"units": "metres (head modelled in cm)", "aus": sup},
     }
+    with_textures(doc, mats)
     if animated:
         timing = timing_extras(track)
         doc["scenes"][0]["extras"] = timing

@@ -20,13 +20,11 @@ Layout (metres; the character is modelled in cm)::
 
 from __future__ import annotations
 
-import io
 from typing import Any
 
 import numpy as np
 
 import mimika
-from mimika.face.head import Part
 from mimika.facs import AU_CATALOGUE
 from mimika.io.gltf import (
     _ARRAY,
@@ -37,68 +35,14 @@ from mimika.io.gltf import (
     SCALE,
     _Animation,
     _Builder,
-    _materials,
+    _Materials,
     _normals,
     _quat,
-    _srgb_to_linear,
+    _uv_attribute,
     timing_extras,
+    with_textures,
 )
 from mimika.tracks import AUTrack
-
-_SKIN_MATERIALS = ("skin", "lips", "skin_body")
-_TWO_SIDED = ("hair", "hair_coily", "brow", "lash", "eyebrow", "eyelash", "cloth", "cornea")
-
-
-def _png(image: np.ndarray, drop_alpha: bool) -> bytes:
-    from PIL import Image
-
-    img = np.asarray(image, np.uint8)
-    if drop_alpha and img.shape[2] == 4:
-        img = img[:, :, :3]
-    buf = io.BytesIO()
-    Image.fromarray(img).save(buf, format="PNG", optimize=False)
-    return buf.getvalue()
-
-
-class _Materials:
-    """glTF materials (+ images, textures) per (material name, texture) of the parts."""
-
-    def __init__(self, b: _Builder) -> None:
-        self.b = b
-        self.src = _materials()
-        self.materials: list[dict] = []
-        self.images: list[dict] = []
-        self.textures: list[dict] = []
-        self._index: dict[tuple, int] = {}
-
-    def get(self, part: Part) -> int:
-        key = (part.material, id(part.texture), part.alpha_mode)
-        if key in self._index:
-            return self._index[key]
-        m = self.src.get(part.material, self.src.get("_default", {"color": "#9a9a9a"}))
-        shin = float(m.get("shininess", 20.0))
-        alpha = float(m.get("alpha", 1.0))
-        pbr: dict[str, Any] = {"baseColorFactor": [*_srgb_to_linear(m["color"]), alpha],
-                               "metallicFactor": 0.0,
-                               "roughnessFactor": round(float(np.sqrt(2.0 / (shin + 2.0))), 4)}
-        out: dict[str, Any] = {"name": part.material, "pbrMetallicRoughness": pbr}
-        if part.texture is not None:
-            data = _png(part.texture.image, part.material in _SKIN_MATERIALS)
-            view = self.b.add_bytes(data)
-            self.images.append({"bufferView": view, "mimeType": "image/png",
-                                "name": part.texture.name or part.material})
-            self.textures.append({"source": len(self.images) - 1, "sampler": 0})
-            pbr["baseColorTexture"] = {"index": len(self.textures) - 1}
-            pbr["baseColorFactor"] = [1.0, 1.0, 1.0, alpha]
-        if part.alpha_mode == "blend" or alpha < 1.0:
-            out["alphaMode"] = "BLEND"
-        elif part.alpha_mode == "mask":
-            out["alphaMode"], out["alphaCutoff"] = "MASK", 0.5
-        if part.material in _TWO_SIDED:
-            out["doubleSided"] = True
-        self.materials.append(out)
-        self._index[key] = len(self.materials) - 1
-        return self._index[key]
 
 
 def _morph_codes(rig: Any) -> list[str]:
@@ -155,9 +99,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
                  "NORMAL": b.add(_normals(v, o.faces.astype(np.int64)), "VEC3", _FLOAT,
                                  target=_ARRAY)}
         if o.uvs is not None:
-            uv = np.asarray(o.uvs, np.float32).copy()
-            uv[:, 1] = 1.0 - uv[:, 1]  # glTF: v grows downward
-            attrs["TEXCOORD_0"] = b.add(uv, "VEC2", _FLOAT, target=_ARRAY)
+            attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs)
         if not eye:
             joints, wts = _top4(sk.weights[o.name])
             attrs["JOINTS_0"] = b.add(joints, "VEC4", _USHORT, target=_ARRAY)
@@ -206,10 +148,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
                    "character": rig.head.meta.get("character", rig.head.name),
                    "rig": rig_description(rig)},
     }
-    if mats.textures:
-        doc["images"], doc["textures"] = mats.images, mats.textures
-        doc["samplers"] = [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071,
-                            "wrapT": 33071}]
+    with_textures(doc, mats)
     if track is not None and track.n_frames:
         # Blender turns an animated skinned node into an empty named like the node plus a
         # mesh object named like the mesh: name the node apart so the mesh keeps its name

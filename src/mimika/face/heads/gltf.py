@@ -62,7 +62,7 @@ _ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
 _GLOSS_ALPHA = ("skin", "lips")
 
 
-def _texture(mat: SceneMaterial, key: str) -> tuple[Texture, str]:
+def part_texture(mat: SceneMaterial, key: str) -> tuple[Texture, str]:
     """The part's texture — the base-colour image times the base-colour factor, or a 1×1
     image of the factor — and its alpha mode (glTF OPAQUE | MASK | BLEND)."""
     f = np.asarray(mat.base_color, float)
@@ -262,7 +262,7 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
                 parts.append(Part(key, f))
                 continue
             materials[mat.name] = mat
-            tex, mode = _texture(mat, key)
+            tex, mode = part_texture(mat, key)
             parts.append(Part(key, f, tex, mode))
         pivot = None
         if cat == "eyes":

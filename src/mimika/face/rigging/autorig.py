@@ -54,6 +54,7 @@ class _Piece:
     parts: list[tuple[str, np.ndarray]]  # material name, faces (local indices)
     uvs: np.ndarray | None = None
     category: str = "face"
+    materials: list | None = None  # glTF: the SceneMaterial of each part (or None)
 
 
 def _split(v: np.ndarray, f: np.ndarray, groups: np.ndarray, names: tuple[str, ...],
@@ -95,10 +96,13 @@ def _read(path: Path) -> tuple[list[_Piece], str, int | None]:
         sc = read_gltf(path)
         pieces = []
         for m in sc.meshes:
-            parts = [(sc.materials[k].name if 0 <= k < len(sc.materials) else "default", f)
-                     for k, f in m.primitives]
+            mats = [sc.materials[k] if 0 <= k < len(sc.materials) else None
+                    for k, _ in m.primitives]
+            parts = [(mat.name if mat else "default", f)
+                     for mat, (_, f) in zip(mats, m.primitives, strict=True)]
             uv = None if m.uvs is None else np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]]
-            pieces.append(_Piece(m.name, m.vertices, parts, uv, mesh_category(m, sc, set())))
+            pieces.append(_Piece(m.name, m.vertices, parts, uv, mesh_category(m, sc, set()),
+                                 mats))
         pieces.sort(key=lambda p: (p.category != "face", -len(p.vertices)))
         return pieces, "m", sc.vrm_version
     raise DataError(f"{path}: mimika rig reads .obj, .glb, .gltf and .vrm meshes")
@@ -146,12 +150,18 @@ def _classify(pieces: list[_Piece], frame: Frame) -> None:
             pc.category = "teeth"
 
 
+def _part(material: str, faces: np.ndarray, category: str, mat=None) -> Part:
+    """A renderer part; a glTF material keeps its base-colour texture and alpha mode."""
+    from mimika.face.heads.gltf import part_texture, render_material
+
+    key = render_material(material, category)
+    return Part(key, faces) if mat is None else Part(key, faces, *part_texture(mat, key))
+
+
 def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: str = "ict"
              ) -> RiggedMesh:
     """Rig the mesh at ``path`` (see the module doc); ``style``: whose shapes the fields were
     fitted on (:data:`~mimika.face.rigging.generate.STYLES`)."""
-    from mimika.face.heads.gltf import render_material
-
     t0 = time.perf_counter()
     p = Path(path)
     if not p.is_file():
@@ -183,7 +193,8 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: st
         used[base] = used.get(base, 0) + 1
         name = base if used[base] == 1 else f"{base}.{used[base] - 1}"
         v = frame.apply(pc.vertices).astype(np.float32)
-        parts = tuple(Part(render_material(m, pc.category), f) for m, f in pc.parts)
+        parts = tuple(_part(m, f, pc.category, mat) for (m, f), mat in
+                      zip(pc.parts, pc.materials or [None] * len(pc.parts), strict=True))
         pivot = None
         if pc.category == "eyes":
             pivot = sphere_fit(v)[0]
