@@ -196,11 +196,12 @@ def wae_state(res: WAEResult, *, channels: tuple[str, ...], fps: float,
 
 def train_from_takes(data: str | os.PathLike | None = None, *, latent_dim: int = 6,
                      iters: int | None = None, test_takes: Sequence[str] = (), seed: int = 0,
-                     progress: Progress | None = None) -> tuple[dict[str, Any], WAEResult]:
+                     progress: Progress | None = None, turn_sliders: bool = True
+                     ) -> tuple[dict[str, Any], WAEResult]:
     """Train the controller on a folder of takes (default ``$MIMIKA_MOTION_DIR``; frames as
-    :func:`mimika.learn.gan_data.load_frames` prepares them), holding out ``test_takes``;
-    returns ``(checkpoint dict, result)`` — save it with
-    :func:`mimika.learn.wgan.save_checkpoint`."""
+    :func:`mimika.learn.gan_data.load_frames` prepares them), holding out ``test_takes``, and
+    turn its sliders for distinct ends (:mod:`mimika.learn.sliders`); returns ``(checkpoint
+    dict, result)`` — save it with :func:`mimika.learn.wgan.save_checkpoint`."""
     from mimika.learn.gan_data import load_frames
 
     fs = load_frames(data)
@@ -213,4 +214,10 @@ def train_from_takes(data: str | os.PathLike | None = None, *, latent_dim: int =
         {fs.takes[i] for i in np.unique(train.take)}), "test_takes": list(test_takes),
         "train_frames": len(train), "preprocessing": "fold to 20 bilateral face AUs; subtract "
         "per-take median frame; clip to [0, 1]"}
-    return wae_state(res, channels=fs.channels, fps=fs.fps, meta=meta), res
+    state = wae_state(res, channels=fs.channels, fps=fs.fps, meta=meta)
+    if turn_sliders:  # the same model, its slider ends as distinct as they go
+        from mimika.learn.controller import Controller
+        from mimika.learn.sliders import distinct_rotation, rotate_state
+
+        state = rotate_state(state, distinct_rotation(Controller(state)))
+    return state, res
