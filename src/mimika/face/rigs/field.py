@@ -252,13 +252,18 @@ class Split:
         return cls(np.asarray(d["point"], float), n / np.linalg.norm(n), prof,
                    None if soft is None else tuple(float(x) for x in soft))
 
+    def signed(self, v: np.ndarray) -> np.ndarray:
+        """Signed distance (along the normal) of points (N, 3) above the split surface."""
+        s = (v - self.point) @ self.normal
+        if self.profile is not None:
+            s = s - np.interp(np.abs(v[:, 0] - self.point[0]), *self.profile.T)
+        return s
+
     def upper_weight(self, v: np.ndarray) -> np.ndarray:
         """Weight of the upper field for points (N, 3), shape (N,), in [0, 1]: 1 above the
         split, 0 below, blended across the soft band outside the opening."""
-        s = (v - self.point) @ self.normal
+        s = self.signed(v)
         ax = np.abs(v[:, 0] - self.point[0])
-        if self.profile is not None:
-            s = s - np.interp(ax, *self.profile.T)
         hard = (s > 0).astype(float)
         if self.soft is None:
             return hard
