@@ -34,6 +34,7 @@ sys.path.insert(0, str(ROOT / "src"))
 from mimika.learn.controller import Controller
 from mimika.learn.gan_data import load_frames, neutral_relative
 from mimika.learn.protocol import bootstrap
+from mimika.learn.sliders import distinct_rotation, rotate_state
 from mimika.learn.wae import WAEConfig, train_wae, wae_state
 from mimika.learn.wgan import save_checkpoint
 
@@ -159,6 +160,8 @@ def main() -> None:
                 "preprocessing": "fold to 20 bilateral face AUs; subtract per-take median "
                                  "frame; clip to [0, 1]",
                 "evaluation": "bench/controller_report.py (docs/controller.md)"})
+            # the same model with its sliders turned for distinct ends (mimika.learn.sliders)
+            state = rotate_state(state, distinct_rotation(Controller(state)))
             if a.ship:
                 save_checkpoint(SHIP, state)
                 print(f"shipped {SHIP} ({SHIP.stat().st_size / 1e3:.0f} kB, trained in "
