@@ -132,16 +132,15 @@ def character_mesh(preset: str):
     faceunits (AU-table names)."""
     from mimika.face.heads.character import character_shapes
     from mimika.face.makehuman.character_file import character_from_dict
+    from mimika.face.rigging.template import welded_skin
 
     ch = character_from_dict({"extends": preset, "name": preset, "hair": "none",
                               "clothes": []}, preset)
     head, shapes = character_shapes(ch)
-    skin = head["skin"]
-    _, first, inverse = np.unique(skin.weld, return_index=True, return_inverse=True)
-    f = inverse[np.concatenate([p.faces for p in skin.parts])]
+    v, f, first = welded_skin(head)
     truth = {n: shapes.deltas["skin"][k][first].astype(float)
              for k, n in enumerate(shapes.names) if n != "tongueOut"}
-    return skin.vertices[first].astype(float), f.astype(np.int64), truth
+    return v, f.astype(np.int64), truth
 
 
 def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path,

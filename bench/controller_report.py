@@ -103,6 +103,8 @@ def main() -> None:
     ap.add_argument("--facegood", default=os.environ.get("MIMIKA_FACEGOOD_DIR"))
     ap.add_argument("--dims", default="6")
     ap.add_argument("--iters", type=int, default=WAEConfig.iters)
+    ap.add_argument("--peak", type=float, default=WAEConfig.peak,
+                    help="reconstruction weight 1 + peak·x per AU (shipped: %(default)s)")
     ap.add_argument("--out", default="/tmp/mimika-controller")
     ap.add_argument("--reuse", action="store_true")
     ap.add_argument("--ship", action="store_true")
@@ -119,12 +121,14 @@ def main() -> None:
     for d in [int(x) for x in a.dims.split(",")]:
         recons, tests, takes = {"wae": [], "pca": []}, [], []
         for t in fs.takes:
-            key = out / f"loto_d{d}_{t}.pkl"
+            tag = "" if a.peak == WAEConfig.peak else f"_peak{a.peak:g}"
+            key = out / f"loto_d{d}{tag}_{t}.pkl"
             train, test = fs.split([t])
             if a.reuse and key.exists():
                 r = pickle.loads(key.read_bytes())
             else:
-                res = train_wae(train.values, WAEConfig(latent_dim=d, iters=a.iters))
+                res = train_wae(train.values, WAEConfig(latent_dim=d, iters=a.iters,
+                                                        peak=a.peak))
                 state = wae_state(res, channels=fs.channels, fps=fs.fps)
                 t0 = time.perf_counter()
                 r = {"wae": invert(state, test.values), "seconds": res.seconds,

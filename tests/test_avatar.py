@@ -493,13 +493,13 @@ def test_rig_makehuman_style_finds_a_characters_landmarks(tmp_path):
     from mimika.face.heads.character import character_shapes
     from mimika.face.makehuman.character_file import character_from_dict
     from mimika.face.rigging.autorig import rig_mesh
+    from mimika.face.rigging.template import welded_skin
 
     bare = character_from_dict({"extends": "daniel", "hair": "none", "clothes": []}, "test")
     head, shapes = character_shapes(bare)
-    skin = head["skin"]
-    _, first, inverse = np.unique(skin.weld, return_index=True, return_inverse=True)
+    v, f, first = welded_skin(head)
     p = tmp_path / "daniel.obj"
-    _write_obj(p, skin.vertices[first], inverse[np.concatenate([q.faces for q in skin.parts])])
+    _write_obj(p, v, f)
     truth = head.landmark_points()
     err, rigs = {}, {}
     for style in ("ict", "makehuman"):

@@ -223,8 +223,7 @@ def _setup(head: Head, jaw_skin: np.ndarray, opt: FitOptions, what: str,
     in_face[off["skin"]:off["skin"] + len(face)] = face
     upper = {name: sp.upper_weight(rest) for name, sp in probe.splits.items()}
     teeth_names = [o.name for o in head.objects if o.category == "teeth"]
-    teeth_rest = np.concatenate([np.zeros((0, 3))] + [head[n].vertices for n in teeth_names]
-                                ).astype(float)
+    teeth_rest = np.concatenate([head[n].vertices for n in teeth_names]).astype(float)
     fit_kw = dict(family=opt.family, sigma_min=opt.sigma_min_cm / scale,
                   psi_evals=opt.psi_evals, phi_evals=opt.phi_evals,
                   rbf_centers=opt.rbf_centers, rbf_ridge=opt.rbf_ridge)

@@ -13,24 +13,25 @@ from mimika.face.fitting.splits import similarity_transform
 from mimika.face.head import Head
 from mimika.face.rigging.features import find_face
 
-__all__ = ["face_template", "icp_nonrigid", "icp_similarity"]
+__all__ = ["face_template", "icp_nonrigid", "icp_similarity", "welded_skin"]
 
 
-def _welded(head: Head) -> tuple[np.ndarray, np.ndarray]:
-    """The skin with its UV-seam copies merged (as a mesh file would have it)."""
+def welded_skin(head: Head) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The skin with its UV-seam copies merged, as a mesh file would have it: vertices,
+    faces and, per merged vertex, the skin vertex it was (to index per-vertex data)."""
     skin = head["skin"]
     faces = np.concatenate([p.faces for p in skin.parts])
     if skin.weld is None:
-        return skin.vertices.astype(float), faces
+        return skin.vertices.astype(float), faces, np.arange(skin.n_vertices)
     _, first, inverse = np.unique(skin.weld, return_index=True, return_inverse=True)
-    return skin.vertices[first].astype(float), inverse[faces]
+    return skin.vertices[first].astype(float), inverse[faces], first
 
 
 def face_template(head: Head, n_surface: int = 2000, seed: int = 0) -> dict:
     """``openings`` (eye_L, eye_R, mouth as the finder sees them) and ``surface`` (up to
     ``n_surface`` points of the face between the chin and above the brows, in front of the
     ears) of ``head``, cm, for a fields document's ``source``."""
-    v, f = _welded(head)
+    v, f, _ = welded_skin(head)
     feat = find_face(v, f)
     if feat is None:
         raise ValueError(f"{head.name}: the opening finder finds no face on the template")
