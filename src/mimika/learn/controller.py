@@ -264,12 +264,13 @@ class Controller:
         return x
 
     # -- rendering ----------------------------------------------------------------------------
-    def traversal_images(self, *, head: Any = "builtin", values: Sequence[float] = TRAVERSAL,
+    def traversal_images(self, *, head: Any = None, values: Sequence[float] = TRAVERSAL,
                          label: str | None = None, tile: tuple[int, int] = (160, 160),
                          view: str = "front", progress: Progress | None = None
                          ) -> list[np.ndarray]:
-        """Each slider swept over ``values`` (the others 0), rendered on ``head``: a list of
-        ``latent_dim × len(values)`` (H, W, 3) uint8 images, slider by slider."""
+        """Each slider swept over ``values`` (the others 0), rendered on ``head`` (a head
+        spec or a rig; default: the default head): a list of ``latent_dim × len(values)``
+        (H, W, 3) uint8 images, slider by slider."""
         from mimika.facs.blender import blend_frames
         from mimika.render import Renderer
 
@@ -286,7 +287,7 @@ class Controller:
                     progress(k + 1, d * n)
         return images
 
-    def render_grid(self, *, head: Any = "builtin", values: Sequence[float] = TRAVERSAL,
+    def render_grid(self, *, head: Any = None, values: Sequence[float] = TRAVERSAL,
                     label: str | None = None, tile: tuple[int, int] = (160, 160),
                     view: str = "front", title: str | None = None,
                     progress: Progress | None = None) -> np.ndarray:
@@ -307,7 +308,7 @@ class Controller:
         return contact_sheet(images, names, columns=n, title=title)
 
     def render(self, z: Sequence[float] | np.ndarray, *, label: str | None = None,
-               head: Any = "builtin", size: tuple[int, int] = (640, 480),
+               head: Any = None, size: tuple[int, int] = (640, 480),
                view: str = "front") -> np.ndarray:
         """One slider setting rendered on ``head``: (H, W, 3) uint8."""
         from mimika.render import Renderer
@@ -319,13 +320,14 @@ class Controller:
 
 
 def _rig(head: Any):
+    """The rig of ``head``: a rig as is, a head spec loaded, None the default head."""
     from mimika.face.rig import Rig
 
     if isinstance(head, Rig):
         return head
     from mimika.face.heads import load_head
 
-    return load_head(head)[1]
+    return (load_head() if head is None else load_head(head))[1]
 
 
 def _supported(aus: dict[str, float], rig) -> dict[str, float]:
