@@ -545,3 +545,8 @@ def test_rig_keeps_the_inputs_textures(tmp_path):
         px = ren.render(rigged.rest).astype(int)
     face = px[40:120, 50:110]
     assert ((face[..., 1] > face[..., 0] + 40) & (face[..., 1] > face[..., 2] + 40)).mean() > 0.3
+    if NODE is not None and (TOOLS / "node_modules" / "gltf-validator").is_dir():
+        r = subprocess.run([NODE, str(TOOLS / "validate.mjs"), str(out)], capture_output=True,
+                           text=True, cwd=TOOLS, timeout=120)
+        rep = json.loads(r.stdout)
+        assert rep["numErrors"] == 0 and rep["numWarnings"] == 0, rep["messages"][:3]

@@ -233,6 +233,11 @@ class _Materials:
         self.textures: list[dict] = []
         self._index: dict[tuple, int] = {}
 
+    @staticmethod
+    def textured(part: Part) -> bool:
+        """The part needs an image (and UVs): a texture larger than one pixel."""
+        return part.texture is not None and part.texture.image.shape[:2] != (1, 1)
+
     def get(self, part: Part) -> int:
         key = (part.material, id(part.texture), part.alpha_mode)
         if key in self._index:
@@ -244,7 +249,12 @@ class _Materials:
                                "metallicFactor": 0.0,
                                "roughnessFactor": round(float(np.sqrt(2.0 / (shin + 2.0))), 4)}
         out: dict[str, Any] = {"name": part.material, "pbrMetallicRoughness": pbr}
-        if part.texture is not None:
+        if part.texture is not None and not self.textured(part):
+            # a flat colour (an untextured glTF material read back): its factor
+            px = part.texture.image[0, 0]
+            pbr["baseColorFactor"] = [*_srgb_to_linear("#" + bytes(px[:3]).hex()),
+                                      round(float(px[3]) / 255.0, 6) if len(px) > 3 else alpha]
+        elif part.texture is not None:
             data = _png(part.texture.image, part.material in _SKIN_MATERIALS)
             view = self.b.add_bytes(data)
             self.images.append({"bufferView": view, "mimeType": "image/png",
@@ -321,8 +331,9 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
         f_all = o.faces.astype(np.int64)
         attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
                  "NORMAL": b.add(_normals(v, f_all), "VEC3", _FLOAT, target=_ARRAY)}
-        if o.uvs is not None and any(p.texture is not None for p in o.parts):
-            attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs)
+        if any(mats.textured(p) for p in o.parts):
+            attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs if o.uvs is not None else
+                                                np.zeros((o.n_vertices, 2)))
         if not eye:
             w = np.clip(motion["weights"][o.name], 0.0, 1.0)
             # the larger weight first; a joint slot with zero weight holds joint 0

@@ -34,14 +34,16 @@ def _sparse(b, d: np.ndarray) -> int:
     """A sparse VEC3 accessor of deltas ``d`` (N, 3): only the vertices that move are stored
     (a face shape moves a few thousand of a body's vertices)."""
     ids = np.flatnonzero(np.abs(d).max(1) > 0).astype(np.uint32)
-    vals = d[ids]
+    vals = d[ids].astype(np.float32)
+    lo, hi = vals.min(0), vals.max(0)
+    if len(ids) < len(d):  # the vertices left out are 0
+        lo, hi = np.minimum(lo, 0), np.maximum(hi, 0)
     b.accessors.append({
         "componentType": 5126, "count": len(d), "type": "VEC3",
-        "min": np.minimum(vals.min(0), 0).astype(float).tolist(),
-        "max": np.maximum(vals.max(0), 0).astype(float).tolist(),
+        "min": lo.astype(float).tolist(), "max": hi.astype(float).tolist(),
         "sparse": {"count": len(ids),
                    "indices": {"bufferView": _view(b, ids), "componentType": 5125},
-                   "values": {"bufferView": _view(b, vals.astype(np.float32))}}})
+                   "values": {"bufferView": _view(b, vals)}}})
     return len(b.accessors) - 1
 
 
