@@ -288,6 +288,42 @@ def with_textures(doc: dict, mats: _Materials) -> None:
                             "wrapT": 33071}]
 
 
+def _object_attributes(b: _Builder, o: Any, uvs: bool) -> tuple[bool, np.ndarray, dict]:
+    """(is an eye, its origin, attributes) of a head object: positions (eyes about their
+    centre, which their node carries), normals and, with ``uvs``, texture coordinates (zeros
+    when the object has none). Joints and weights are the caller's."""
+    eye = o.category == "eyes" and o.pivot is not None
+    origin = np.asarray(o.pivot, float) if eye else np.zeros(3)
+    v = ((o.vertices - origin) * SCALE).astype(np.float32)
+    attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
+             "NORMAL": b.add(_normals(v, o.faces.astype(np.int64)), "VEC3", _FLOAT,
+                             target=_ARRAY)}
+    if uvs:
+        attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs if o.uvs is not None else
+                                            np.zeros((o.n_vertices, 2)))
+    return eye, origin, attrs
+
+
+def _object_mesh(b: _Builder, mats: _Materials, o: Any, attrs: dict, targets: list[dict],
+                 names: list[str]) -> dict:
+    """The glTF mesh of a head object: one primitive per part, sharing attributes and morph
+    targets (named in ``extras.targetNames``)."""
+    prims = []
+    for part in o.parts:
+        idx = part.faces.astype(np.uint32).reshape(-1)
+        prim = {"attributes": attrs, "indices": b.add(idx, "SCALAR", _UINT, target=_ELEMENTS,
+                                                      minmax=True),
+                "material": mats.get(part), "mode": 4}
+        if targets:
+            prim["targets"] = targets
+        prims.append(prim)
+    mesh: dict[str, Any] = {"name": o.name, "primitives": prims}
+    if targets:
+        mesh["weights"] = [0.0] * len(targets)
+        mesh["extras"] = {"targetNames": names}
+    return mesh
+
+
 def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = None
                ) -> tuple[dict, bytes]:
     """The glTF JSON document and its binary buffer for ``rig``'s head (+ ``track``)."""
@@ -325,15 +361,7 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
     for o in head.objects:
         if not o.parts:
             continue
-        eye = o.category == "eyes" and o.pivot is not None
-        origin = np.asarray(o.pivot, float) if eye else np.zeros(3)
-        v = ((o.vertices - origin) * SCALE).astype(np.float32)
-        f_all = o.faces.astype(np.int64)
-        attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
-                 "NORMAL": b.add(_normals(v, f_all), "VEC3", _FLOAT, target=_ARRAY)}
-        if any(mats.textured(p) for p in o.parts):
-            attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs if o.uvs is not None else
-                                                np.zeros((o.n_vertices, 2)))
+        eye, origin, attrs = _object_attributes(b, o, any(mats.textured(p) for p in o.parts))
         if not eye:
             w = np.clip(motion["weights"][o.name], 0.0, 1.0)
             # the larger weight first; a joint slot with zero weight holds joint 0
@@ -349,20 +377,7 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
         targets = [{"POSITION": b.add(d, "VEC3", _FLOAT, target=_ARRAY, minmax=True)}
                    for _, d in deltas[o.name]]
         names = [c for c, _ in deltas[o.name]]
-        prims = []
-        for part in o.parts:
-            idx = part.faces.astype(np.uint32).reshape(-1)
-            prim = {"attributes": attrs, "indices": b.add(idx, "SCALAR", _UINT,
-                                                          target=_ELEMENTS, minmax=True),
-                    "material": mats.get(part), "mode": 4}
-            if targets:
-                prim["targets"] = targets
-            prims.append(prim)
-        mesh = {"name": o.name, "primitives": prims}
-        if targets:
-            mesh["weights"] = [0.0] * len(targets)
-            mesh["extras"] = {"targetNames": names}
-        meshes.append(mesh)
+        meshes.append(_object_mesh(b, mats, o, attrs, targets, names))
         node: dict[str, Any] = {"name": o.name, "mesh": len(meshes) - 1}
         nodes.append(node)
         ni = len(nodes) - 1

@@ -28,17 +28,15 @@ import mimika
 from mimika.facs import AU_CATALOGUE
 from mimika.io.gltf import (
     _ARRAY,
-    _ELEMENTS,
     _FLOAT,
-    _UINT,
     _USHORT,
     SCALE,
     _Animation,
     _Builder,
     _Materials,
-    _normals,
+    _object_attributes,
+    _object_mesh,
     _quat,
-    _uv_attribute,
     timing_extras,
     with_textures,
 )
@@ -92,14 +90,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
     for o in bind.objects:
         if not o.parts:
             continue
-        eye = o.category == "eyes" and o.pivot is not None
-        origin = np.asarray(o.pivot, float) if eye else np.zeros(3)
-        v = ((o.vertices - origin) * SCALE).astype(np.float32)
-        attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
-                 "NORMAL": b.add(_normals(v, o.faces.astype(np.int64)), "VEC3", _FLOAT,
-                                 target=_ARRAY)}
-        if o.uvs is not None:
-            attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs)
+        eye, origin, attrs = _object_attributes(b, o, o.uvs is not None)
         if not eye:
             joints, wts = _top4(sk.weights[o.name])
             attrs["JOINTS_0"] = b.add(joints, "VEC4", _USHORT, target=_ARRAY)
@@ -112,20 +103,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
             names.append(c)
             targets.append({"POSITION": b.add((d * SCALE).astype(np.float32), "VEC3",
                                               _FLOAT, target=_ARRAY, minmax=True)})
-        prims = []
-        for part in o.parts:
-            idx = part.faces.astype(np.uint32).reshape(-1)
-            prim = {"attributes": attrs, "indices": b.add(idx, "SCALAR", _UINT,
-                                                          target=_ELEMENTS, minmax=True),
-                    "material": mats.get(part), "mode": 4}
-            if targets:
-                prim["targets"] = targets
-            prims.append(prim)
-        mesh: dict[str, Any] = {"name": o.name, "primitives": prims}
-        if targets:
-            mesh["weights"] = [0.0] * len(targets)
-            mesh["extras"] = {"targetNames": names}
-        meshes.append(mesh)
+        meshes.append(_object_mesh(b, mats, o, attrs, targets, names))
         node = {"name": o.name, "mesh": len(meshes) - 1}
         nodes.append(node)
         ni = len(nodes) - 1
