@@ -105,6 +105,9 @@ def main() -> None:
     ap.add_argument("--iters", type=int, default=WAEConfig.iters)
     ap.add_argument("--peak", type=float, default=WAEConfig.peak,
                     help="reconstruction weight 1 + peak·x per AU (shipped: %(default)s)")
+    ap.add_argument("--knowledge", type=float, default=WAEConfig.knowledge,
+                    help="share of each batch drawn from FACS frames (shipped: %(default)s)")
+    ap.add_argument("--takes", help="held-out takes to run (comma-separated; default all)")
     ap.add_argument("--out", default="/tmp/mimika-controller")
     ap.add_argument("--reuse", action="store_true")
     ap.add_argument("--ship", action="store_true")
@@ -120,18 +123,21 @@ def main() -> None:
     report: dict = {"loto": {}, "lopo": {}}
     for d in [int(x) for x in a.dims.split(",")]:
         recons, tests, takes = {"wae": [], "pca": []}, [], []
-        for t in fs.takes:
+        folds = a.takes.split(",") if a.takes else fs.takes
+        for t in folds:
             tag = "" if a.peak == WAEConfig.peak else f"_peak{a.peak:g}"
+            tag += "" if a.knowledge == WAEConfig.knowledge else f"_know{a.knowledge:g}"
             key = out / f"loto_d{d}{tag}_{t}.pkl"
             train, test = fs.split([t])
             if a.reuse and key.exists():
                 r = pickle.loads(key.read_bytes())
             else:
                 res = train_wae(train.values, WAEConfig(latent_dim=d, iters=a.iters,
-                                                        peak=a.peak))
+                                                        peak=a.peak, knowledge=a.knowledge),
+                                channels=fs.channels)
                 state = wae_state(res, channels=fs.channels, fps=fs.fps)
                 t0 = time.perf_counter()
-                r = {"wae": invert(state, test.values), "seconds": res.seconds,
+                r = {"wae": invert(state, test.values), "seconds": res.seconds, "state": state,
                      "invert_seconds": time.perf_counter() - t0,
                      "pca": pca_reconstruct(train.values, test.values, d)}
                 key.write_bytes(pickle.dumps(r))
@@ -146,7 +152,7 @@ def main() -> None:
         ev = evaluate({m: np.concatenate(v) for m, v in recons.items()}, np.concatenate(tests),
                       np.array(takes))
         report["loto"][d] = ev
-        for t in fs.takes:  # per take (no intervals)
+        for t in folds:  # per take (no intervals)
             m = np.array(takes) == t
             x = np.concatenate(tests)[m]
             ev.setdefault("per_take", {})[t] = {
@@ -155,10 +161,11 @@ def main() -> None:
         print_summary(f"leave-one-take-out, d = {d}", ev, fs.channels)
     if a.ship or a.facegood:
         d = 6
-        if a.reuse and SHIP.exists():
+        if a.reuse and SHIP.exists() and not a.ship:
             state = torch.load(SHIP, weights_only=True)
         else:
-            res = train_wae(fs.values, WAEConfig(latent_dim=d, iters=a.iters))
+            res = train_wae(fs.values, WAEConfig(latent_dim=d, iters=a.iters, peak=a.peak,
+                                                 knowledge=a.knowledge), channels=fs.channels)
             state = wae_state(res, channels=fs.channels, fps=fs.fps, meta={
                 "data": "Live Link Face takes " + ", ".join(fs.takes), "train_frames": len(fs),
                 "preprocessing": "fold to 20 bilateral face AUs; subtract per-take median "

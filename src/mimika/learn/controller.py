@@ -217,7 +217,8 @@ class Controller:
     # -- inversion ----------------------------------------------------------------------------
     def invert_batch(self, frames: np.ndarray, labels: Sequence[str] | None = None, *,
                      steps: int = 200, restarts: int = 6, seed: int = 0,
-                     fit: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                     fit: np.ndarray | None = None, peak: float | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
         """Real frames (N, K) over :attr:`channels` → (z (N, d), reconstructions (N, K));
         ``fit`` (K,) bool: fit only these channels (e.g. those another rig carries)."""
         from mimika.learn.inversion import invert_frames
@@ -238,7 +239,8 @@ class Controller:
             y = None
         return invert_frames(self._gen, np.clip(x, 0.0, 1.0), self.mean, self.std,
                              latent_dim=self.latent_dim, labels=y, encoder=self._enc,
-                             steps=steps, restarts=restarts, seed=seed, channels=fit)
+                             steps=steps, restarts=restarts, seed=seed, channels=fit,
+                             peak=self.config.get("peak", 0.0) if peak is None else peak)
 
     def invert(self, frame: dict[str, float] | Sequence[float] | np.ndarray,
                label: str | None = None, **kwargs: Any) -> np.ndarray:

@@ -67,7 +67,8 @@ def invert_frames(gen: GenFn, frames: np.ndarray, mean: np.ndarray, std: np.ndar
                   latent_dim: int, labels: np.ndarray | None = None,
                   encoder: Encoder | None = None, steps: int = 200, restarts: int = 6,
                   prior: float = 1e-3, lr: float = 0.05, seed: int = 0,
-                  channels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  channels: np.ndarray | None = None, peak: float = 0.0
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """Latent vectors whose generated frames best match ``frames``.
 
     Parameters
@@ -77,6 +78,8 @@ def invert_frames(gen: GenFn, frames: np.ndarray, mean: np.ndarray, std: np.ndar
     labels : (N,) int, for a conditional generator
     channels : (K,) bool, the channels to fit (default all; e.g. the channels a second
         person's rig carries)
+    peak : each channel's squared error weighted ``1 + peak·x`` (strong AUs count more, as
+        in the WAE's training loss)
 
     Returns
     -------
@@ -102,9 +105,11 @@ def invert_frames(gen: GenFn, frames: np.ndarray, mean: np.ndarray, std: np.ndar
     keep = (torch.ones(x.shape[1]) if channels is None else
             torch.from_numpy(np.asarray(channels, np.float32)))
 
+    w = keep * (1.0 + peak * xr)
+
     def err(zz: torch.Tensor) -> torch.Tensor:
         out = torch.clamp(gen(zz, yr) * sd + mu, 0.0, 1.0)
-        return ((out - xr) ** 2 * keep).sum(dim=1) / keep.sum(), out
+        return ((out - xr) ** 2 * w).sum(dim=1) / keep.sum(), out
 
     for _ in range(steps):
         e, _ = err(z)

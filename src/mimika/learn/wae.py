@@ -14,6 +14,9 @@ through an encoder — and trains the encoder inversion needs together with the 
 * reconstruction ``‖G(E(x)) − x‖²`` weighted ``1 + peak·x`` per AU (strong AUs count more),
   plus ``mmd`` × MMD(E(x), N(0, I)) with the inverse multiquadric kernel: the encoded frames
   fill the sliders' prior, so slider settings land where the data are.
+* a share ``knowledge`` of each batch is drawn from FACS frames
+  (:mod:`mimika.learn.facs_frames`: every AU alone, the expression library, sparse mixes
+  through the AU Blender), so the sliders also reach actions the recordings never show.
 
 A WGAN-GP critic on decoded prior samples (the seed's adversarial objective on top) was tried
 and left out: at weights 0.05 / 0.5 it moved prior samples no closer to real frames (mean
@@ -38,6 +41,8 @@ import torch
 from torch import nn
 
 from mimika.errors import ParameterError
+from mimika.learn.data import MODEL_CHANNELS
+from mimika.learn.facs_frames import facs_frames
 from mimika.learn.wgan import _as_tensor, check_counts, downsample
 
 log = logging.getLogger(__name__)
@@ -59,14 +64,15 @@ class WAEConfig:
     lr: float = 1e-3
     peak: float = 4.0  #: reconstruction weight 1 + peak·x per AU
     mmd: float = 1.0  #: weight of MMD(E(x), N(0, I))
+    knowledge: float = 0.25  #: share of each batch drawn from FACS frames (facs_frames)
     leak: float = 0.2
     seed: int = 0
 
     def check(self) -> WAEConfig:
         check_counts(self, "latent_dim", "hidden", "iters", "batch")
-        if not self.lr > 0 or min(self.peak, self.mmd) < 0:
+        if not self.lr > 0 or min(self.peak, self.mmd) < 0 or not 0 <= self.knowledge < 1:
             raise ParameterError(f"lr={self.lr!r} must be > 0, peak={self.peak!r} and "
-                                 f"mmd={self.mmd!r} ≥ 0")
+                                 f"mmd={self.mmd!r} ≥ 0, knowledge={self.knowledge!r} in [0, 1)")
         return self
 
 
@@ -137,13 +143,20 @@ class WAEResult:
 
 
 def train_wae(train: np.ndarray, config: WAEConfig | None = None, *,
+              channels: Sequence[str] = MODEL_CHANNELS,
               progress: Progress | None = None) -> WAEResult:
-    """Train on AU frames ``train`` (N, K) in [0, 1]; see the module docstring."""
+    """Train on AU frames ``train`` (N, K) in [0, 1] over ``channels``; see the module
+    docstring."""
     cfg = (config or WAEConfig()).check()
     x = _as_tensor(train, "train")
     n, K = x.shape
     if n <= cfg.latent_dim:
         raise ParameterError(f"{n} frames cannot fit {cfg.latent_dim} sliders")
+    n_known = round(cfg.batch * cfg.knowledge)
+    if n_known:
+        if len(channels) != K:
+            raise ParameterError(f"{K} channels in the frames, {len(channels)} named")
+        known = torch.from_numpy(facs_frames(channels=channels, seed=cfg.seed))
     torch.manual_seed(cfg.seed)
     enc = WAEEncoder(K, cfg.latent_dim, cfg.hidden, cfg.leak)
     dec = WAEDecoder(cfg.latent_dim, K, cfg.hidden, cfg.leak)
@@ -155,7 +168,10 @@ def train_wae(train: np.ndarray, config: WAEConfig | None = None, *,
     every = max(1, cfg.iters // 100)
     t0 = time.perf_counter()
     for it in range(cfg.iters):
-        real = x[torch.randint(0, n, (cfg.batch,), generator=gen)]
+        real = x[torch.randint(0, n, (cfg.batch - n_known,), generator=gen)]
+        if n_known:
+            real = torch.cat([real, known[torch.randint(0, len(known), (n_known,),
+                                                         generator=gen)]])
         z = enc(real)
         rec = ((dec(z).clamp(0, 1) - real) ** 2 * (1 + cfg.peak * real)).mean()
         mmd = _mmd(z, torch.randn(cfg.batch, cfg.latent_dim, generator=gen))
@@ -209,7 +225,7 @@ def train_from_takes(data: str | os.PathLike | None = None, *, latent_dim: int =
     cfg = WAEConfig(latent_dim=latent_dim, seed=seed)
     if iters is not None:
         cfg.iters = iters
-    res = train_wae(train.values, cfg, progress=progress)
+    res = train_wae(train.values, cfg, channels=fs.channels, progress=progress)
     meta = {"data": str(fs.meta.get("folder", "")), "train_takes": sorted(
         {fs.takes[i] for i in np.unique(train.take)}), "test_takes": list(test_takes),
         "train_frames": len(train), "preprocessing": "fold to 20 bilateral face AUs; subtract "
