@@ -145,6 +145,10 @@ def test_facs_frames_show_every_au_alone_and_obey_the_rules():
     assert np.abs(again - x).max() < 0.1
     smile, stretch = MODEL_CHANNELS.index("AU12"), MODEL_CHANNELS.index("AU20")
     assert not np.any((x[:, smile] > 0.5) & (x[:, stretch] > 0.5))  # 12 excludes 20
+    # given recorded frames, a quarter are one of them with one more AU
+    base = np.full((5, len(MODEL_CHANNELS)), 0.05, np.float32)
+    more = facs_frames(400, base=base)[-100:]
+    assert np.all(np.sum(more > 0.15, axis=1) == 1) and np.all(np.sort(more)[:, :-1] <= 0.05)
 
 
 def test_facs_frames_teach_an_action_the_recordings_never_show():

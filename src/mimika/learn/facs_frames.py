@@ -13,7 +13,13 @@ co-occurrence rules — so the controller also trains on frames drawn from that 
 * **sparse mixes**: two or three AUs drawn at random, each uniform in [0.2, 1];
 
 a third each, with a small non-negative jitter on every channel (recorded frames are never
-exactly zero), passed through the AU Blender (Appendix C co-occurrence rules). Codes the
+exactly zero); given recorded frames, a quarter of all are instead
+
+* **recordings plus one action**: a recorded frame with one AU drawn at random raised to at
+  least a uniform intensity in [0.2, 1] — AUs combine, so a face the performer made with one
+  more action is a face too;
+
+all passed through the AU Blender (Appendix C co-occurrence rules). Codes the
 channels lack go to their closest channel as in :data:`mimika.learn.gan_data.PROTOTYPE_MAP`
 (AU25/AU26 → AU27 jaw, AU23 → AU24 lips); sided codes count for their bilateral AU.
 """
@@ -55,12 +61,15 @@ def _library(channels: Sequence[str]) -> np.ndarray:
 
 
 def facs_frames(n: int = 3000, channels: Sequence[str] = MODEL_CHANNELS, *,
-                seed: int = 0) -> np.ndarray:
-    """``n`` frames (n, K) in [0, 1] over ``channels``, drawn as the module docstring says."""
+                seed: int = 0, base: np.ndarray | None = None) -> np.ndarray:
+    """``n`` frames (n, K) in [0, 1] over ``channels``, drawn as the module docstring says;
+    given recorded ``base`` frames, a quarter are those frames with one more AU."""
     from mimika.facs.blender import blend_frames
 
     rng = np.random.default_rng(seed)
     K = len(channels)
+    n0 = 0 if base is None else n // 4
+    n -= n0
     n1 = n2 = n // 3  # single AUs, library expressions; the rest are mixes
     x = np.zeros((n, K), np.float32)
     x[np.arange(n1), np.arange(n1) % K] = rng.uniform(*AU_RANGE, n1)
@@ -70,5 +79,10 @@ def facs_frames(n: int = 3000, channels: Sequence[str] = MODEL_CHANNELS, *,
         aus = rng.choice(K, size=rng.integers(2, 4), replace=False)
         x[i, aus] = rng.uniform(*AU_RANGE, len(aus))
     x = np.clip(x + np.abs(rng.normal(0.0, JITTER, x.shape)), 0.0, 1.0)
+    if n0:
+        more = np.asarray(base, np.float32)[rng.integers(0, len(base), n0)]
+        k = rng.integers(0, K, n0)
+        more[np.arange(n0), k] = np.maximum(more[np.arange(n0), k], rng.uniform(*AU_RANGE, n0))
+        x = np.concatenate([x, more])
     blended, chans = blend_frames(x, channels)
     return blended[:, [chans.index(c) for c in channels]]

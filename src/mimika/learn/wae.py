@@ -15,8 +15,9 @@ through an encoder — and trains the encoder inversion needs together with the 
   plus ``mmd`` × MMD(E(x), N(0, I)) with the inverse multiquadric kernel: the encoded frames
   fill the sliders' prior, so slider settings land where the data are.
 * a share ``knowledge`` of each batch is drawn from FACS frames
-  (:mod:`mimika.learn.facs_frames`: every AU alone, the expression library, sparse mixes
-  through the AU Blender), so the sliders also reach actions the recordings never show.
+  (:mod:`mimika.learn.facs_frames`: every AU alone, the expression library, sparse mixes,
+  training frames with one more AU — through the AU Blender), so the sliders also reach
+  actions and combinations the recordings never show.
 
 A WGAN-GP critic on decoded prior samples (the seed's adversarial objective on top) was tried
 and left out: at weights 0.05 / 0.5 it moved prior samples no closer to real frames (mean
@@ -156,7 +157,7 @@ def train_wae(train: np.ndarray, config: WAEConfig | None = None, *,
     if n_known:
         if len(channels) != K:
             raise ParameterError(f"{K} channels in the frames, {len(channels)} named")
-        known = torch.from_numpy(facs_frames(channels=channels, seed=cfg.seed))
+        known = torch.from_numpy(facs_frames(channels=channels, seed=cfg.seed, base=train))
     torch.manual_seed(cfg.seed)
     enc = WAEEncoder(K, cfg.latent_dim, cfg.hidden, cfg.leak)
     dec = WAEDecoder(cfg.latent_dim, K, cfg.hidden, cfg.leak)
