@@ -1,8 +1,8 @@
 """The controller's figures in docs/controller.md: held-out inversion against PCA.
 
     MIMIKA_MOTION_DIR=../shared/motion/livelinkface MIMIKA_FACEGOOD_DIR=../shared/motion/facegood \
-        .venv/bin/python bench/controller_report.py [--dims 4,6] [--iters N] [--out DIR] \
-        [--reuse] [--ship]
+        .venv/bin/python bench/controller_report.py [--dims 4,6] [--iters N] [--peak W] \
+        [--knowledge F] [--takes T1,T2] [--out DIR] [--reuse] [--ship]
 
 Leave-one-take-out over every Live Link Face take: for each take, the controller (the WAE of
 mimika.learn.wae) and a PCA of the same size are fitted on the other takes, and every frame of
@@ -13,7 +13,8 @@ strong AU's value its peak frames keep (frames where the AU reaches max(0.3, its
 percentile)). Leave-one-person-out: the model trained on all five takes, on FACEGOOD's second
 person, fitted and scored on the 13 channels that person's rig carries. ``--ship`` trains the
 d = 6 controller on all five takes and writes src/mimika/learn/data/controller.pt. Each fold
-is cached in ``--out``; ``--reuse`` loads it.
+is cached in ``--out``; ``--reuse`` loads it; ``--takes`` runs only those folds (run two
+processes to use two cores, then one with ``--reuse`` for the summary).
 """
 
 from __future__ import annotations
