@@ -220,7 +220,8 @@ class Controller:
                      fit: np.ndarray | None = None, peak: float | None = None
                      ) -> tuple[np.ndarray, np.ndarray]:
         """Real frames (N, K) over :attr:`channels` → (z (N, d), reconstructions (N, K));
-        ``fit`` (K,) bool: fit only these channels (e.g. those another rig carries)."""
+        ``fit`` (K,) bool: fit only these channels (e.g. those another rig carries); ``peak``:
+        errors weighted ``1 + peak·x`` (default: as the model was trained, WAE 4, GANs 0)."""
         from mimika.learn.inversion import invert_frames
 
         x = np.asarray(frames, np.float32)
