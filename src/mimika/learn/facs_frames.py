@@ -43,21 +43,11 @@ JITTER = 0.02
 
 def _library(channels: Sequence[str]) -> np.ndarray:
     """The built-in expressions (but neutral) over ``channels``: (E, K) at full intensity."""
-    from mimika.facs.catalogue import base_code
     from mimika.knowledge.expressions import builtin_expressions
-    from mimika.learn.gan_data import PROTOTYPE_MAP
+    from mimika.learn.gan_data import expression_vector
 
-    idx = {c: j for j, c in enumerate(channels)}
-    rows = []
-    for e in builtin_expressions().values():
-        row = np.zeros(len(channels), np.float32)
-        for code, v in e.scaled(1.0).items():
-            c = PROTOTYPE_MAP.get(base_code(code), base_code(code))
-            if c in idx:
-                row[idx[c]] = max(row[idx[c]], v)
-        if row.any():
-            rows.append(row)
-    return np.array(rows, np.float32)
+    rows = [expression_vector(e.scaled(1.0), channels) for e in builtin_expressions().values()]
+    return np.array([r for r in rows if r.any()], np.float32)
 
 
 def facs_frames(n: int = 3000, channels: Sequence[str] = MODEL_CHANNELS, *,

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,7 +34,8 @@ from mimika.errors import DataError, ParameterError
 
 log = logging.getLogger(__name__)
 
-__all__ = ["ENV_DIR", "LABELS", "TEST_TAKES", "FrameSet", "find_motion_dir", "load_frames",
+__all__ = ["ENV_DIR", "LABELS", "TEST_TAKES", "FrameSet", "expression_vector", "find_motion_dir",
+           "load_frames",
            "nearest_neighbour", "neutral_relative", "nn_labels", "prototype_labels",
            "prototypes", "read_take_frames"]
 
@@ -165,18 +166,26 @@ def load_frames(folder: str | os.PathLike | None = None, *,
     return fs
 
 
+def expression_vector(aus: Mapping[str, float], channels: Sequence[str]) -> np.ndarray:
+    """An expression's AUs ``{code: value}`` over ``channels`` (K,) float64: sided codes count for
+    their bilateral AU, codes the channels lack go to :data:`PROTOTYPE_MAP`'s closest one."""
+    from mimika.facs.catalogue import base_code
+
+    idx = {c: j for j, c in enumerate(channels)}
+    row = np.zeros(len(channels))
+    for code, v in aus.items():
+        c = PROTOTYPE_MAP.get(base_code(code), base_code(code))
+        if c in idx:
+            row[idx[c]] = max(row[idx[c]], float(v))
+    return row
+
+
 def prototypes(channels: Sequence[str]) -> np.ndarray:
     """Library prototypes of :data:`LABELS` over ``channels``: (len(LABELS), K); row 0 is 0."""
     from mimika.knowledge.expressions import get_expression
 
-    idx = {c: j for j, c in enumerate(channels)}
-    P = np.zeros((len(LABELS), len(channels)), np.float32)
-    for i, lab in enumerate(LABELS[1:], start=1):
-        for code, v in get_expression(lab).items():
-            c = PROTOTYPE_MAP.get(code, code)
-            if c in idx:
-                P[i, idx[c]] = max(P[i, idx[c]], v)
-    return P
+    return np.array([np.zeros(len(channels))] + [
+        expression_vector(get_expression(lab), channels) for lab in LABELS[1:]], np.float32)
 
 
 def prototype_labels(values: np.ndarray, channels: Sequence[str], *,

@@ -168,27 +168,15 @@ def label_prototype(aus: np.ndarray, *, channels: Sequence[str] = MODEL_CHANNELS
     return (best if d[best] <= threshold else "unlabelled"), d[best]
 
 
-ALIASES = {"AU26": "AU27", "AU25": "AU27", "AU23": "AU24"}
-
-
 def library_prototypes(channels: Sequence[str] = MODEL_CHANNELS,
                        names: Sequence[str] | None = None) -> dict[str, np.ndarray]:
-    """Expression-library entries as AU vectors over ``channels`` (with :data:`ALIASES`)."""
+    """Expression-library entries as AU vectors over ``channels``
+    (:func:`mimika.learn.gan_data.expression_vector`)."""
     from mimika.knowledge.expressions import builtin_expressions
+    from mimika.learn.gan_data import expression_vector
 
-    lib = builtin_expressions()
-    out = {}
-    for n, e in lib.items():
-        if (names is not None and n not in names) or not e.aus:
-            continue  # neutral (no AUs) is decided by activation, not by matching
-        v = np.zeros(len(channels))
-        for c, x in e.aus.items():
-            c = c[:4] if c[:4] in channels else ALIASES.get(c[:4], c[:4])
-            if c in channels:
-                j = list(channels).index(c)
-                v[j] = max(v[j], float(x) * (0.5 if len(c) > 4 else 1.0))
-        out[n] = v
-    return out
+    return {n: expression_vector(e.aus, channels) for n, e in builtin_expressions().items()
+            if (names is None or n in names) and e.aus}  # neutral is decided by activation
 
 
 @dataclass(frozen=True)
