@@ -18,11 +18,21 @@ def lib(tmp_path):
 
 def test_basic_emotions_are_emfacs_prototypes():
     b = builtin_expressions()
-    aus = {n: sorted(int(c[2:4]) for c in b[n].aus) for n in
-           ("happiness", "sadness", "surprise", "fear", "anger", "disgust")}
-    assert aus == {"happiness": [6, 12], "sadness": [1, 4, 15], "surprise": [1, 2, 5, 26],
-                   "fear": [1, 2, 4, 5, 7, 20, 26], "anger": [4, 5, 7, 23],
-                   "disgust": [9, 15, 16]}
+    aus = {n: sorted(c for c in b[n].aus) for n in
+           ("happiness", "sadness", "surprise", "fear", "anger", "disgust", "contempt")}
+    assert aus == {"happiness": ["AU06", "AU12", "AU25"],
+                   "sadness": ["AU01", "AU04", "AU15", "AU17"],
+                   "surprise": ["AU01", "AU02", "AU05", "AU25", "AU26"],
+                   "fear": ["AU01", "AU02", "AU04", "AU05", "AU07", "AU20", "AU25", "AU26"],
+                   "anger": ["AU04", "AU05", "AU07", "AU10", "AU23", "AU25", "AU26"],
+                   "disgust": ["AU09", "AU10", "AU15", "AU16", "AU25"],
+                   "contempt": ["AU12R", "AU14R"]}
+    # complete at apex: each prototype's main AUs at E, an AU the prototype letters at its
+    # letter (5B), nothing weaker than B
+    for name in ("happiness", "sadness", "surprise", "fear", "anger", "disgust"):
+        assert max(b[name].aus.values()) == 1.0 and min(b[name].aus.values()) >= 0.4, name
+    assert b["happiness"].aus["AU06"] == b["happiness"].aus["AU12"] == 1.0
+    assert b["contempt"].aus["AU14R"] == 1.0
     assert b["surprise"].aus["AU05"] == pytest.approx(0.4)  # 5B
     assert b["neutral"].aus == {}
 
@@ -44,7 +54,7 @@ def test_template_durations_lie_in_the_probable_range():
 
 
 def test_name_resolution_and_scaling():
-    assert get_expression("happiness", 0.5) == {"AU06": 0.3, "AU12": 0.4}
+    assert get_expression("happiness", 0.5) == {"AU06": 0.5, "AU12": 0.5, "AU25": 0.4}
     assert get_expression("astonishment") == get_expression("template/astonishment")
     assert get_expression("Ironic Smile") == {"AU10": 0.5, "AU12": 0.6}
     assert ex.expression_aus("anger", 0.0) == {c: 0.0 for c in get_expression("anger")}

@@ -9,8 +9,10 @@ table ``face/data/makehuman_aus.json`` and head/body motion by skinning.
 
 from __future__ import annotations
 
+import copy
 import json
 import logging
+from collections.abc import Mapping
 from importlib import resources
 
 import numpy as np
@@ -26,6 +28,10 @@ from mimika.face.rigs.skinned import SkinnedRig, Skinning
 
 log = logging.getLogger(__name__)
 
+#: prefix of the shapes generated on a character in the ``ict`` style (the per-shape fields
+#: fitted on the ICT Face Model's light-stage scans, carried by the 68 landmarks): the AU table
+#: mixes them with MakeHuman's faceunits where those move too little or too much of the face
+ICT_STYLE = "ict."
 
 
 def arkit_to_table_name(name: str) -> str:
@@ -55,9 +61,41 @@ def _landmark_ids(skin_weld: np.ndarray) -> np.ndarray:
     return np.array([first[int(b)] for b in base_ids], np.int64)
 
 
-def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, SkinnedRig]:
+#: shapes of an AU recipe that stay MakeHuman's when the AU is mixed with the ict style: the
+#: jaw (it carries the teeth and tongue, which the generated shapes leave still) and the lids
+_NATIVE = ("jaw", "eyeBlink", "eyeLook")
+
+
+def calibrated_table(table: Mapping, calibration: Mapping[str, Mapping] | None = None) -> dict:
+    """``table`` with each AU's ``calibration`` (``{"ict": w, "gain": g}``, overridden per AU by
+    ``calibration``) folded into its shapes: gain · ((1 − w) · faceunits + w · ICT's recipe on
+    the ict-style shapes); jaw and lid shapes stay the faceunits' (× gain). See
+    ``scripts/calibrate_characters.py``, which measures and writes the calibration."""
+    out = copy.deepcopy(dict(table))
+    ict = load_table("ict_aus.json")["aus"]
+    for code, entry in out["aus"].items():
+        cal = {**entry.get("calibration", {}), **(calibration or {}).get(code, {})}
+        if not cal or "shapes" not in entry:
+            continue
+        w, g = float(cal.get("ict", 0.0)), float(cal.get("gain", 1.0))
+        mixed: dict[str, float] = {}
+        for name, x in entry["shapes"].items():
+            keep = name.startswith(_NATIVE) or w == 0.0
+            mixed[name] = mixed.get(name, 0.0) + g * x * (1.0 if keep else 1.0 - w)
+        if w > 0.0:
+            for name, x in ict.get(code, {}).get("shapes", {}).items():
+                if not name.startswith(_NATIVE):
+                    key = ICT_STYLE + name
+                    mixed[key] = mixed.get(key, 0.0) + g * w * x
+        entry["shapes"] = {k: round(v, 6) for k, v in mixed.items() if v != 0.0}
+    return out
+
+
+def assemble(built: Built, character: Character, parts_of=None,
+             calibration: Mapping[str, Mapping] | None = None) -> tuple[Head, SkinnedRig]:
     """The posed head and its rig. ``parts_of(piece)`` → Parts lets a painter attach textures
-    (default: one untextured part per material)."""
+    (default: one untextured part per material); ``calibration`` overrides the AU table's
+    (see :func:`calibrated_table`)."""
     scale, offset = _to_head_frame(built)
     sk = built.skeleton
     pose = rest_pose(sk)
@@ -88,7 +126,7 @@ def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, S
     head = Head(character.name, tuple(posed_objs), lm, a, description=desc, meta=meta)
     bind_head = Head(character.name, tuple(bind_objs), lm, a, description=desc, meta=meta)
     shapes = _shape_set(built, scale)
-    table = load_table("makehuman_aus.json")
+    table = calibrated_table(load_table("makehuman_aus.json"), calibration)
     skinning = Skinning(sk.names, heads_cm, sk.parents, built.weights,
                         {k: np.asarray(v) for k, v in pose.items()}, table["head_share"],
                         table.get("body", {}))
@@ -97,8 +135,42 @@ def assemble(built: Built, character: Character, parts_of=None) -> tuple[Head, S
 
 def _shape_set(built: Built, scale: float) -> ShapeSet:
     """The faceunits as AU-table shape names and head-frame deltas (cm)."""
-    names = tuple(arkit_to_table_name(n) for n in built.shape_names)
+    names = tuple(n if n.startswith(ICT_STYLE) else arkit_to_table_name(n)
+                  for n in built.shape_names)
     return ShapeSet(names, {k: v * scale for k, v in built.deltas.items()})
+
+
+def _with_ict_style(built: Built) -> Built:
+    """``built`` with the ``ict`` style's shapes (:data:`ICT_STYLE` + name) generated on its
+    skin and carried to the other pieces through their bindings, as the faceunits are (eyes
+    turn by rotation and take none)."""
+    from mimika.face.rigging.generate import generate_shapes
+
+    scale, offset = _to_head_frame(built)
+    sk = built.pieces[0]
+    skin = MeshObject("skin", "face", sk.vertices * scale + offset,
+                      tuple(Part(m, f) for m, f in sk.parts.items()), weld=sk.weld,
+                      oriented=True)
+    head = Head("bind", (skin,), _landmark_ids(sk.weld), {})
+    shapes = generate_shapes(head)
+    # as on ICT itself (its table's still_back_z_cm): the fields fade out behind the ears
+    z0, z1 = load_table("ict_aus.json")["still_back_z_cm"]
+    t = np.clip((skin.vertices[:, 2] - z0) / (z1 - z0), 0.0, 1.0)
+    fade = (t * t * (3 - 2 * t))[:, None]
+    n_base = len(built.base_vertices)
+    dense = np.zeros((len(shapes), n_base, 3), np.float32)
+    for k, per in enumerate(shapes.values()):
+        if "skin" in per:
+            dense[k, sk.weld] = per["skin"] * fade / scale
+    deltas = {}
+    for p in built.pieces:
+        extra = (np.zeros((len(shapes), len(p.vertices), 3), np.float32)
+                 if p.category == "eyes" else
+                 np.stack([p.binding @ d for d in dense]).astype(np.float32))
+        deltas[p.name] = np.concatenate([built.deltas[p.name], extra])
+    names = (*built.shape_names, *(ICT_STYLE + n for n in shapes))
+    return Built(built.pieces, built.skeleton, names, deltas, built.weights,
+                 built.base_vertices)
 
 
 def _built(character: Character) -> Built:
@@ -106,9 +178,9 @@ def _built(character: Character) -> Built:
     path = cache.cache_path(character.geometry_key())
     built = cache.load(path)
     if built is None:
-        built = build(character.phenotype_values(),
-                      Outfit(character.hair, character.eyebrows, character.eyelashes,
-                             character.clothes))
+        built = _with_ict_style(build(character.phenotype_values(),
+                                      Outfit(character.hair, character.eyebrows,
+                                             character.eyelashes, character.clothes)))
         try:
             cache.save(path, built)
         except OSError as e:
@@ -133,6 +205,12 @@ def load_character(spec: str) -> tuple[Head, SkinnedRig]:
     return _LOADED[key]
 
 
+def character_rig(spec: str, calibration: Mapping[str, Mapping]) -> SkinnedRig:
+    """The (untextured) rig of a character with its AU calibration overridden per AU."""
+    character = load_character_spec(spec)
+    return assemble(_built(character), character, calibration=calibration)[1]
+
+
 def base_character() -> Character:
     """MakeHuman's average person without hair or clothes (what the ``makehuman`` shape
     fields are fitted on)."""
@@ -148,4 +226,7 @@ def character_shapes(spec: str | Character) -> tuple[Head, ShapeSet]:
     character = spec if isinstance(spec, Character) else load_character_spec(spec)
     built = _built(character)
     head, _ = assemble(built, character)
-    return head, _shape_set(built, _to_head_frame(built)[0])
+    shapes = _shape_set(built, _to_head_frame(built)[0])
+    own = [k for k, n in enumerate(shapes.names) if not n.startswith(ICT_STYLE)]
+    return head, ShapeSet(tuple(shapes.names[k] for k in own),
+                          {o: d[own] for o, d in shapes.deltas.items()})

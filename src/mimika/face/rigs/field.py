@@ -17,7 +17,7 @@ from __future__ import annotations
 import json
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -35,6 +35,8 @@ log = logging.getLogger(__name__)
 MIXERS = ("additive", "successive")
 #: Softness (cm) of the left/right masks used for unilateral variants.
 SIDE_SOFTNESS = 0.5
+#: cm: skin within this distance of an eyeball's sphere at rest counts as lid (slides over it)
+LID_BAND = 0.35
 
 
 # --- the function families (pure array functions) ----------------------------------------------
@@ -366,6 +368,28 @@ class FieldSet:
         return d * self.scale
 
 
+def _scaled(f: LinearField | SplitField | None, gain: float, spread: float):
+    """``f`` with every Gaussian's η × ``gain`` and σ × ``spread`` (means kept) and its RBF
+    residual × ``gain``: an AU field's calibration (``"calibration": {"gain", "spread"}``)."""
+    if f is None:
+        return None
+    if isinstance(f, SplitField):
+        return replace(f, upper=_scaled(f.upper, gain, spread),
+                       lower=_scaled(f.lower, gain, spread))
+    gs = tuple(replace(g, eta=g.eta * gain, B=g.B / spread**2) for g in f.gaussians)
+    rbf = None if f.rbf is None else replace(f.rbf, weights=f.rbf.weights * gain)
+    return replace(f, gaussians=gs, rbf=rbf)
+
+
+def _calibration(spec: Mapping) -> tuple[float, float]:
+    cal = spec.get("calibration", {})
+    gain, spread = float(cal.get("gain", 1.0)), float(cal.get("spread", 1.0))
+    if not (0.0 <= gain <= 10.0 and 0.1 <= spread <= 10.0):
+        raise ValueError(f"calibration gain={gain} must be in [0, 10] and spread={spread} in "
+                         "[0.1, 10]")
+    return gain, spread
+
+
 def _field_from_json(d: Mapping, splits: Mapping[str, Split]) -> LinearField | SplitField:
     if "upper" in d or "lower" in d:
         up, lo = d.get("upper"), d.get("lower")
@@ -406,7 +430,8 @@ def parse_fields(data: Mapping, *, source: str = "<memory>") -> FieldSet:
         try:
             kind = spec.get("kind", "linear")
             if kind == "linear":
-                linear[code] = {cat: _field_from_json(f, splits)
+                gain, spread = _calibration(spec)
+                linear[code] = {cat: _scaled(_field_from_json(f, splits), gain, spread)
                                 for cat, f in spec["objects"].items()}
             elif kind in ("rotation", "translation"):
                 rotations[code] = (RotationAU.from_json(spec), tuple(spec["objects"]))
@@ -474,6 +499,9 @@ class FieldRig(Rig):
     order : sequence of AU codes, optional
         Order of successive AUs (default: linear AUs, then eye rotations, then head motion —
         seed 002's default: each object's own AUs first, whole-head AUs last).
+    keep_lids : bool
+        Skin lying on an eyeball slides over it: after the additive AUs, lid vertices a
+        field moved toward an eye's centre are pushed back to their rest distance (default).
 
     Additive AUs are evaluated on the rest mesh and summed (order-free); successive AUs are
     then applied one after another to the already deformed mesh, in ``order``.
@@ -486,6 +514,7 @@ class FieldRig(Rig):
         *,
         mixers: Mapping[str, str] | None = None,
         order: Sequence[str] | None = None,
+        keep_lids: bool = True,
     ) -> None:
         self.head = head
         self.fields = fields
@@ -500,6 +529,8 @@ class FieldRig(Rig):
                 raise ParameterError(f"{c} is a rotation: it can only be mixed successively")
             self.mixers[c] = m
         self.order = self._order(order)
+        #: skin on the eyeballs never sinks into them (:meth:`_keep_lids_on_eyes`)
+        self.keep_lids = keep_lids
 
     # -- what it models
     @property
@@ -645,6 +676,34 @@ class FieldRig(Rig):
                     if o.category in cats:
                         pos[o.name] = rot.apply(pos[o.name], tl, o.pivot).astype(np.float32)
 
+    @cached_property
+    def _lids(self) -> list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]:
+        """Skin that lies on an eyeball (within :data:`LID_BAND` cm of its sphere at rest):
+        (object, vertex ids, eye centre, rest distance from it) per face object and eye."""
+        out = []
+        eyes = [o for o in self.head.objects if o.category == "eyes" and o.pivot is not None]
+        for o in self.head.objects:
+            if o.category != "face" or self._additive.get(o.name) is None:
+                continue
+            for e in eyes:
+                radius = float(np.median(np.linalg.norm(e.vertices - e.pivot, axis=1)))
+                d0 = np.linalg.norm(o.vertices - e.pivot, axis=1)
+                ids = np.flatnonzero(d0 < radius + LID_BAND)
+                if len(ids):
+                    out.append((o.name, ids, e.pivot.astype(np.float32), d0[ids]))
+        return out
+
+    def _keep_lids_on_eyes(self, out: dict[str, np.ndarray]) -> None:
+        """Lids slide over the eyeballs: skin that a field moved closer to an eye's centre
+        than it rests is pushed back out to its rest distance (tangential motion kept)."""
+        for name, ids, centre, d0 in self._lids:
+            p = out[name][:, ids] - centre  # (T, n, 3)
+            d = np.linalg.norm(p, axis=2)
+            inside = d < d0
+            if inside.any():
+                scale = np.where(inside, d0 / np.maximum(d, 1e-6), 1.0)
+                out[name][:, ids] = centre + p * scale[..., None]
+
     # -- deformation
     def deform(self, aus: Mapping[str, float]) -> Positions:
         vals = self.check(aus)
@@ -677,6 +736,8 @@ class FieldRig(Rig):
                 pos = weights @ mat
                 pos += o.vertices.ravel()
             out[o.name] = pos.reshape(len(values), o.n_vertices, 3)
+        if self.keep_lids:
+            self._keep_lids_on_eyes(out)
         succ = [j for j, c in enumerate(chans) if self.mixers[c[:4]] == "successive"]
         if any(chans[j] in self.fields.linear for j in succ):  # rare: per frame
             for t in np.nonzero(np.any(values[:, succ] != 0, axis=1))[0]:

@@ -1,0 +1,181 @@
+"""Development judge for the expressions: do the library's basic emotions read on every head?
+
+Renders the seven expressions (neutral and the six basic emotions of the library) per head ×
+view × intensity with ``mimika pose``'s path, and shows each image to an emotion recogniser
+trained on photographs of people (face-api's expression CNN, with its SSD face detector and
+68-point landmark net, run in Node: ``bench/judge``, installed by ``scripts/setup-judge.sh``).
+Prints, per head × view × intensity, the top label and the intended class's probability of
+each expression and the recognition rate; then landmark measures (inter-ocular units, from
+the detected landmarks) of single AUs against the ICT head's, which is a light-stage scan of
+a real actor (skipped without ``MIMIKA_ICT_DIR``)::
+
+    bash scripts/setup-judge.sh
+    .venv/bin/python bench/expression_judge.py                       # presets + builtin
+    .venv/bin/python bench/expression_judge.py --heads amara --views front --out out/judge
+
+Targets (issue 25): per head and view, at intensity 1.0, at least 6 of the 7 recognised, and
+happiness also at 0.6; landmark measures within 0.7–1.4 of ICT's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+JUDGE = ROOT / "bench" / "judge"
+
+#: library expression → the judge's class
+CLASSES = {"neutral": "neutral", "happiness": "happy", "sadness": "sad", "surprise": "surprised",
+           "fear": "fearful", "anger": "angry", "disgust": "disgusted"}
+HEADS = ("amara", "daniel", "mei", "tomas", "builtin")
+#: landmark measures: name → (AUs, what is measured)
+MEASURES = {
+    "AU12 corner rise": ({"AU12": 1.0}, "corners"),
+    "AU01+02 brow rise": ({"AU01": 1.0, "AU02": 1.0}, "brows"),
+    "AU26 opening": ({"AU26": 1.0}, "opening"),
+    "AU27 opening": ({"AU27": 1.0}, "opening"),
+}
+
+
+def judge(files: list[Path]) -> list[dict]:
+    """The judge's verdict on each PNG (see ``bench/judge/judge.cjs``)."""
+    if not (JUDGE / "node_modules").is_dir():
+        sys.exit("expression_judge: the judge is not installed; run: bash scripts/setup-judge.sh")
+    out = subprocess.run(["node", str(JUDGE / "judge.cjs"), *map(str, files)],
+                         capture_output=True, text=True, check=True).stdout
+    return [json.loads(line) for line in out.splitlines() if line.strip()]
+
+
+def render(rig, aus: dict, view: str, size: tuple[int, int], path: Path) -> Path:
+    from mimika.pose import render_pose
+    from mimika.render import save_png
+
+    return save_png(render_pose(aus, head=rig, view=view, size=size), path)
+
+
+def _iod(lm: np.ndarray) -> float:
+    return float(np.linalg.norm(lm[36:42].mean(0) - lm[42:48].mean(0)))
+
+
+def measure(kind: str, rest: np.ndarray, moved: np.ndarray) -> float:
+    """A landmark measure in inter-ocular units (image y grows downward)."""
+    iod = _iod(rest)
+    if kind == "corners":  # mouth corners 48, 54 rise against the eyes
+        ref = lambda lm: lm[[48, 54], 1].mean() - lm[36:48, 1].mean()  # noqa: E731
+    elif kind == "brows":  # brow landmarks 17–26 rise against the eyes
+        ref = lambda lm: lm[17:27, 1].mean() - lm[36:48, 1].mean()  # noqa: E731
+    else:  # inner-lip opening: 62 ↔ 66 (with its neighbours)
+        return float(np.mean(moved[65:68, 1] - moved[61:64, 1][::-1])
+                     - np.mean(rest[65:68, 1] - rest[61:64, 1][::-1])) / iod
+    return float(ref(rest) - ref(moved)) / iod
+
+
+def run_head(name: str, views, intensities, size, out: Path) -> dict:
+    from mimika.face.heads import load_head
+    from mimika.knowledge.expressions import expression_aus
+
+    _, rig = load_head(name)
+    jobs = []
+    for view in views:
+        for k in intensities:
+            for expr in CLASSES:
+                aus = expression_aus(expr, k) if expr != "neutral" else {}
+                jobs.append((view, k, expr, render(rig, aus, view, size,
+                                                   out / f"{name}_{view}_{expr}_{k:g}.png")))
+        for m, (aus, _) in MEASURES.items():
+            jobs.append((view, None, m, render(rig, aus, view, size,
+                                               out / f"{name}_{view}_{m.split()[0]}.png")))
+    verdicts = judge([j[3] for j in jobs])
+    res: dict = {"expressions": [], "measures": {}}
+    rest = {}
+    for (view, k, what, _), v in zip(jobs, verdicts, strict=True):
+        if k is not None:
+            ex = v.get("expressions", {})
+            top = max(ex, key=ex.get) if ex else "no face"
+            res["expressions"].append({"view": view, "intensity": k, "expression": what,
+                                       "top": top, "p": ex.get(CLASSES[what], 0.0)})
+            if what == "neutral" and "landmarks" in v:
+                rest[view] = np.asarray(v["landmarks"])
+        elif "landmarks" in v and view in rest:
+            kind = MEASURES[what][1]
+            res["measures"][view, what] = measure(kind, rest[view], np.asarray(v["landmarks"]))
+    return res
+
+
+def print_head(name: str, res: dict, ref: dict | None) -> list[int]:
+    rows: dict = {}
+    for e in res["expressions"]:
+        rows.setdefault((e["view"], e["intensity"]), []).append(e)
+    counts = []
+    for (view, k), es in rows.items():
+        ok = sum(CLASSES[e["expression"]] == e["top"] for e in es)
+        counts.append(ok)
+        cells = "  ".join(
+            f"{e['expression'][:5]}:{e['top'][:5]}"
+            f"{'✓' if CLASSES[e['expression']] == e['top'] else '✗'}{e['p']:.2f}" for e in es)
+        print(f"{name:8s} {view:13s} {k:4.1f}  {ok}/{len(es)}  {cells}")
+    for (view, m), val in res["measures"].items():
+        r = ref["measures"].get((view, m)) if ref else None
+        ratio = f"  ICT {r:.3f} → ratio {val / r:.2f}" if r else ""
+        print(f"{name:8s} {view:13s} {m:18s} {val:.3f} IOD{ratio}")
+    return counts
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--heads", default=",".join(HEADS))
+    p.add_argument("--views", default="front,three-quarter")
+    p.add_argument("--intensities", default="1.0,0.6")
+    p.add_argument("--size", default="512x512")
+    p.add_argument("--out", type=Path, help="keep the renders and results.json here")
+    a = p.parse_args(argv)
+    size = tuple(int(s) for s in a.size.split("x"))
+    views, heads = a.views.split(","), a.heads.split(",")
+    ks = [float(k) for k in a.intensities.split(",")]
+    tmp = None
+    if a.out is None:
+        tmp = tempfile.TemporaryDirectory(prefix="mimika-judge-")
+        out = Path(tmp.name)
+    else:
+        out = a.out
+        out.mkdir(parents=True, exist_ok=True)
+    ref = None
+    if os.environ.get("MIMIKA_ICT_DIR"):
+        ref = run_head("ict", views, ks, size, out)
+        print_head("ict", ref, None)
+    total, t0 = {}, time.perf_counter()
+    everything = {}
+    for h in heads:
+        res = run_head(h, views, ks, size, out)
+        everything[h] = res
+        total[h] = print_head(h, res, ref)
+    print(f"\n{time.perf_counter() - t0:.0f} s")
+    for h, res in everything.items():
+        full = [e for e in res["expressions"] if e["intensity"] == 1.0]
+        ok = sum(CLASSES[e["expression"]] == e["top"] for e in full)
+        happy = [e for e in res["expressions"] if e["expression"] == "happiness"]
+        hok = sum(e["top"] == "happy" for e in happy)
+        print(f"{h:8s} recognised at 1.0: {ok}/{len(full)} ({100 * ok / max(len(full), 1):.0f} %), "
+              f"happiness at every intensity {hok}/{len(happy)}")
+    if a.out is not None:
+        doc = {h: {"expressions": r["expressions"],
+                   "measures": [{"view": v, "measure": m, "value": x}
+                                for (v, m), x in r["measures"].items()]}
+               for h, r in {**({"ict": ref} if ref else {}), **everything}.items()}
+        (out / "results.json").write_text(json.dumps(doc, indent=1))
+    if tmp is not None:
+        tmp.cleanup()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,128 @@
+"""How far an AU moves a head's face, measured against a physical reference.
+
+The reference is the ICT Face Model: light-stage scans of a real actor's expressions. For an AU
+at intensity 1 a head's skin moves by |Δv| per vertex; over the **face front** (the skin in
+front of the ears between the chin and the hairline, facing the camera — not the neck, body or
+the inside of the mouth) two figures summarise it, both in units of the head's inter-ocular
+distance (IOD, eye centre to eye centre) so heads of any size compare:
+
+* ``peak`` — the largest displacement;
+* ``extent`` — the area-weighted 95th percentile: the displacement that 5 % of the face's area
+  exceeds. A brow raise that lifts the whole forehead has a large extent; one that moves only
+  the brows a small one, at the same peak.
+
+A head is calibrated when, AU by AU, both lie within :data:`TOLERANCE` of the reference's
+(``bench/au_calibration.py`` prints the table; docs/rigs.md#calibration lists it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from mimika.face.head import Head
+
+__all__ = ["EXCEPTIONS", "EXTRA_AUS", "SEED_AUS", "TOLERANCE", "FaceFront", "au_motion",
+           "face_front", "motion", "ratios"]
+
+#: the 22 AUs of seed 002 that move the face (its head and eye turns are rotations)
+SEED_AUS = ("AU01", "AU02", "AU04", "AU05", "AU06", "AU07", "AU09", "AU10", "AU12", "AU15",
+            "AU16", "AU17", "AU18", "AU20", "AU22", "AU23", "AU24", "AU25", "AU26", "AU27",
+            "AU28", "AU43")
+#: mimika's further face AUs that ICT's shapes also cover
+EXTRA_AUS = ("AU11", "AU14", "AU45", "AU46")
+#: calibrated: reference × [low, high]
+TOLERANCE = (0.7, 1.4)
+#: AU → (figures not compared, why). Motions confined to the eyelids cover well under 5 % of
+#: the face, so their 95th percentile measures how many mesh vertices a head puts on its
+#: lids, not how far a lid moves; closing the eye moves the lid as far as that head's eye is
+#: open — FACS defines the closure, not a distance
+EXCEPTIONS: Mapping[str, tuple[tuple[str, ...], str]] = {
+    "AU05": (("extent",), "upper lid raise: only the lid moves (ICT's 95th percentile is "
+                          "0.3 % IOD)"),
+    "AU43": (("peak", "extent"), "eyes closed: the lids meet, however wide the eye is open"),
+    "AU45": (("peak", "extent"), "blink: the lids meet, however wide the eye is open"),
+    "AU46": (("peak", "extent"), "wink: one eye's lids meet"),
+}
+
+
+@dataclass(frozen=True)
+class FaceFront:
+    """The face front of a head's landmark object: ``mask`` (N,) of its vertices, their
+    ``area`` (N,) in cm² (a third of each adjacent triangle) and the head's ``iod`` in cm."""
+
+    mask: np.ndarray
+    area: np.ndarray
+    iod: float
+
+
+def _normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    n = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(n, f[:, k], fn)
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+
+
+def face_front(head: Head) -> FaceFront:
+    """The face front of ``head`` (see the module docstring): within one IOD of the midline,
+    from just below the chin (landmark 8) to 1.25 IOD above the eyes, no deeper than 0.6 IOD
+    behind the eye centres, normals turned toward the camera (+z) by more than 75°'s cosine."""
+    obj = head[head.landmark_object]
+    v = obj.vertices.astype(np.float64)
+    f = obj.faces.astype(np.int64)
+    eye_l, eye_r = (np.asarray(head.anchors[k], np.float64) for k in ("eye_L", "eye_R"))
+    iod = float(np.linalg.norm(eye_l - eye_r))
+    mid = (eye_l + eye_r) / 2
+    chin = head.landmark_points().astype(np.float64)[8]
+    n = _normals(v, f)
+    mask = ((np.abs(v[:, 0] - mid[0]) <= iod) & (v[:, 1] >= chin[1] - 0.05 * iod)
+            & (v[:, 1] <= mid[1] + 1.25 * iod) & (v[:, 2] >= mid[2] - 0.6 * iod)
+            & (n[:, 2] > 0.25))
+    tri = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]),
+                               axis=1)
+    area = np.zeros(len(v))
+    np.add.at(area, f.ravel(), np.repeat(tri / 3.0, 3))
+    return FaceFront(mask, area, iod)
+
+
+def motion(displacement: np.ndarray, front: FaceFront) -> tuple[float, float]:
+    """``(peak, extent)`` of per-vertex displacements (N, 3) cm over ``front``, in IOD."""
+    d = np.linalg.norm(np.asarray(displacement, np.float64), axis=1)[front.mask] / front.iod
+    w = front.area[front.mask]
+    order = np.argsort(d)
+    cum = np.cumsum(w[order])
+    k = min(int(np.searchsorted(cum, 0.95 * cum[-1])), len(d) - 1)
+    return float(d.max()), float(d[order][k])
+
+
+def au_motion(rig, codes: Iterable[str] = SEED_AUS) -> dict[str, tuple[float, float]]:
+    """``(peak, extent)`` of each AU of ``codes`` the rig models, at intensity 1 (both sides)."""
+    head = rig.head
+    front = face_front(head)
+    rest = head.rest[head.landmark_object].astype(np.float64)
+    out = {}
+    for code in codes:
+        if code not in rig.supported:
+            continue
+        moved = np.asarray(rig.deform({code: 1.0})[head.landmark_object], np.float64)
+        out[code] = motion(moved - rest, front)
+    return out
+
+
+def ratios(measured: Mapping[str, tuple[float, float]],
+           reference: Mapping[str, tuple[float, float]]
+           ) -> dict[str, tuple[float | None, float | None]]:
+    """AU → (peak ratio, extent ratio), each None where :data:`EXCEPTIONS` leaves it out, for
+    the AUs both measured."""
+    out = {}
+    for code, (p, e) in measured.items():
+        if code not in reference:
+            continue
+        skip = EXCEPTIONS.get(code, ((), ""))[0]
+        out[code] = tuple(None if what in skip else (x / r if r > 0 else float("inf"))
+                          for what, x, r in zip(("peak", "extent"), (p, e), reference[code],
+                                                strict=True))
+    return out
