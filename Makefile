@@ -5,7 +5,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 OUT ?= out
 
-.PHONY: setup demo test lint bench fuzz clean
+.PHONY: setup demo test lint bench fuzz judge clean
 
 setup: $(VENV)/.installed
 
@@ -27,6 +27,11 @@ test: setup
 bench: setup
 	$(BIN)/python bench/bench_rig.py
 	$(BIN)/python bench/bench_render.py
+
+judge: setup  # the expressions shown to an emotion recogniser, per head × view (bench/)
+	bash scripts/setup-judge.sh
+	$(BIN)/python bench/expression_judge.py
+	$(BIN)/python bench/au_calibration.py
 
 fuzz: setup  # ≥ 100 000 hostile inputs to every reader: 0 crashes, 0 hangs (bench/fuzz.py)
 	$(BIN)/python bench/fuzz.py --cases 100000
