@@ -238,7 +238,7 @@ def test_no_skin_pokes_through_the_clothes(character, pose):
 def _news_frame(head, rig, hidden=(), pose=None, crop=False):
     from mimika.newsreader.pipeline import news_camera
     from mimika.render import Renderer
-    from mimika.render.skin import NEWS_LIGHTING
+    from mimika.render.lighting import NEWS as NEWS_LIGHTING
 
     with Renderer(head, size=(320, 240), samples=0, lighting=NEWS_LIGHTING,
                   hidden=hidden, crop=crop) as r:

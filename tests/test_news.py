@@ -196,7 +196,7 @@ def test_ablation_set_covers_seed_004_seven_features():
 @pytest.mark.render
 def test_skin_shader_changes_the_look_but_not_the_framing(builtin_rig):
     from mimika.render import Renderer
-    from mimika.render.skin import NEWS_LIGHTING
+    from mimika.render.lighting import NEWS as NEWS_LIGHTING
 
     head = builtin_rig.head
     imgs = []

@@ -5,8 +5,9 @@ import pytest
 
 from mimika.errors import RenderError
 from mimika.render.camera import frame_head
+from mimika.render.lighting import NEWS as NEWS_LIGHTING
 from mimika.render.parallel import default_workers, render_track
-from mimika.render.skin import NEWS_LIGHTING, SkinParams
+from mimika.render.skin import SkinParams
 
 pytestmark = pytest.mark.render
 SIZE = (160, 120)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -29,15 +30,18 @@ def render_pose(
     size: tuple[int, int] = (640, 480),
     fields: str | Path | None = None,
     samples: int = 4,
+    lighting: Any = None,
 ) -> np.ndarray:
     """Render ``aus`` (``{"AU12": 1}`` or ``["AU12=1"]``) on ``head`` (default: the default
-    character); returns (H, W, 3) uint8."""
+    character) with their appearance changes, lit by ``lighting`` (a ``--light`` spec or a
+    :class:`~mimika.render.lighting.Lighting`; default ``studio``); returns (H, W, 3)
+    uint8."""
     from mimika.render import Renderer
 
     rig = _rig(head, fields)
     vals = rig.check(parse_au_values(aus))
-    with Renderer(rig.head, size=size, samples=samples) as r:
-        return r.render(rig.deform(vals), view=view)
+    with Renderer(rig.head, size=size, samples=samples, lighting=lighting) as r:
+        return r.render(rig.deform(vals), view=view, aus=vals)
 
 
 def au_sheet(
@@ -48,6 +52,7 @@ def au_sheet(
     columns: int = 8,
     fields: str | Path | None = None,
     progress: Progress | None = None,
+    lighting: Any = None,
 ) -> np.ndarray:
     """A labelled contact sheet: neutral, then one tile per modelled AU at full intensity."""
     from mimika.render import Renderer, contact_sheet
@@ -55,9 +60,10 @@ def au_sheet(
     rig = _rig(head, fields)
     codes = list(rig.supported_bilateral)
     images, labels = [], []
-    with Renderer(rig.head, size=tile) as r:
+    with Renderer(rig.head, size=tile, lighting=lighting) as r:
         for i, code in enumerate([None, *codes]):
-            images.append(r.render(rig.deform({code: 1.0} if code else {}), view=view))
+            aus = {code: 1.0} if code else {}
+            images.append(r.render(rig.deform(aus), view=view, aus=aus))
             labels.append(f"{code} {AU_CATALOGUE[base_code(code)].name}" if code else "neutral")
             if progress:
                 progress(i + 1, len(codes) + 1)

@@ -80,7 +80,8 @@ class Plan:
     def settings(self) -> dict[str, Any]:
         """Render settings shared by every item (sent once per task)."""
         s = self.spec
-        return {"size": list(s.size), "samples": s.samples, "blend": s.blend,
+        return {"size": list(s.size), "samples": s.samples, "light": s.light,
+                "blend": s.blend,
                 "disabled_rules": list(s.disabled_rules), "clip_format": self.clip_format,
                 "animation": None if s.animation is None else {
                     "onset": s.animation.onset, "apex": s.animation.apex,

@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mimika.errors import DataError, MimikaError
+from mimika.errors import DataError, MimikaError, ParameterError
 from mimika.face.heads import DEFAULT_HEAD
 from mimika.facs.catalogue import SEED_AUS, parse_au, parse_intensity
 
@@ -34,8 +34,8 @@ CLIP_FORMATS = ("auto", "mp4", "gif", "strip")
 AU_KEYWORDS = ("seed", "modelled")
 
 TOP_KEYS = ("name", "aus", "expressions", "intensities", "neutral", "sample", "heads",
-            "identities", "views", "size", "samples", "blend", "disabled_rules", "seed",
-            "animation")
+            "identities", "views", "size", "samples", "light", "blend", "disabled_rules",
+            "seed", "animation")
 SAMPLE_KEYS = ("count", "pool", "min_aus", "max_aus", "range", "levels")
 ANIMATION_KEYS = ("onset", "apex", "offset", "fps", "format", "ease", "speech", "audio", "lang")
 
@@ -101,6 +101,7 @@ class BatchSpec:
     views: tuple[str, ...] = ("front",)
     size: tuple[int, int] = (320, 240)
     samples: int = 4
+    light: str = "studio"  #: a ``--light`` spec (mimika.render.lighting)
     blend: bool = True
     disabled_rules: tuple[str, ...] = ()
     seed: int = 0
@@ -535,6 +536,17 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
         if s not in (0, 2, 4, 8):
             raise c.error(("samples",), f"{s} anti-aliasing samples: use 0, 2, 4 or 8")
         kw["samples"] = s
+    if "light" in d:
+        from mimika.render.lighting import parse_light
+
+        if not isinstance(d["light"], str):
+            raise c.error(("light",), "give the lights as a --light spec, e.g. studio or "
+                                      "news,shadows=off")
+        try:
+            parse_light(d["light"])
+        except ParameterError as e:
+            raise c.error(("light",), str(e).replace("--light ", "")) from None
+        kw["light"] = d["light"]
     if "blend" in d:
         kw["blend"] = c.flag(d["blend"], ("blend",))
     if d.get("disabled_rules") is not None:

@@ -28,10 +28,11 @@ _CACHE: OrderedDict[tuple, tuple[Any, Any]] = OrderedDict()
 _CACHE_SIZE = 4
 
 
-def _rig_and_renderer(head: str, identity: Any, size: Sequence[int], samples: int):
+def _rig_and_renderer(head: str, identity: Any, size: Sequence[int], samples: int,
+                      light: str = "studio"):
     """(rig, renderer) for one head/identity/size, loaded once per process (LRU of 4)."""
     ident = tuple(identity) if isinstance(identity, list | tuple) else identity
-    key = (head, ident, tuple(size), int(samples))
+    key = (head, ident, tuple(size), int(samples), light)
     hit = _CACHE.get(key)
     if hit is not None:
         _CACHE.move_to_end(key)
@@ -42,7 +43,8 @@ def _rig_and_renderer(head: str, identity: Any, size: Sequence[int], samples: in
     kw = {} if ident is None else {"identity": list(ident) if isinstance(ident, tuple) else ident}
     t0 = time.perf_counter()
     _, rig = load_head(head, **kw)
-    renderer = Renderer(rig.head, size=(int(size[0]), int(size[1])), samples=int(samples))
+    renderer = Renderer(rig.head, size=(int(size[0]), int(size[1])), samples=int(samples),
+                        lighting=light)
     _CACHE[key] = (rig, renderer)
     log.info("worker %d: loaded head %s (identity %s) in %.2f s", os.getpid(), head, ident,
              time.perf_counter() - t0)
@@ -111,7 +113,7 @@ def _clip_frames(rig: Any, renderer: Any, item: Mapping[str, Any],
         track = combine(mouth_track(utt, fps=a["fps"]), track)
         track = blend_track(track) if blend else track
         track = track.with_channels([c for c in track.channels if c in rig.supported])
-    return [renderer.render(rig.deform(track.frame(i)), view=item["view"])
+    return [renderer.render(rig.deform(track.frame(i)), view=item["view"], aus=track.frame(i))
             for i in range(track.n_frames)], utt
 
 
@@ -155,11 +157,13 @@ def render_items(items: Sequence[Mapping[str, Any]], settings: Mapping[str, Any]
                                "worker": worker}
         try:
             rig, renderer = _rig_and_renderer(item["head"], item["identity"],
-                                              settings["size"], settings["samples"])
+                                              settings["size"], settings["samples"],
+                                              settings.get("light", "studio"))
             pose_key = (id(rig), tuple(sorted(item["aus"].items())))
             if last is None or last[0] != pose_key:
                 last = (pose_key, rig.deform(rig.check(item["aus"])))
-            res["png"] = _png_bytes(renderer.render(last[1], view=item["view"]))
+            res["png"] = _png_bytes(renderer.render(last[1], view=item["view"],
+                                                    aus=item["aus"]))
             if item.get("clip") and settings.get("animation"):
                 frames, utt = _clip_frames(rig, renderer, item, settings)
                 res["clip"] = _encode_clip(frames, settings["clip_format"],

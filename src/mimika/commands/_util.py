@@ -18,6 +18,15 @@ def size_arg(text: str) -> tuple[int, int]:
     return w, h
 
 
+def add_light_arg(parser: argparse.ArgumentParser, default: str) -> None:
+    """``--light SPEC``: a lighting preset and changes (:func:`mimika.render.lighting.
+    parse_light`; checked by the command, so a bad spec is one line and exit 2)."""
+    from mimika.render.lighting import light_help
+
+    parser.add_argument("--light", metavar="SPEC", default=default,
+                        help=light_help().replace("(default: studio)", f"(default: {default})"))
+
+
 #: help of the options that raise a limit (see mimika.limits and docs/limits.md)
 _LIMIT_HELP = {
     "max_duration": ("SECONDS", float, "longest timeline or speech (default 3600)"),

@@ -6,7 +6,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import add_head_arg, limit_options, progress_bar, size_arg
+from mimika.commands._util import (
+    add_head_arg,
+    add_light_arg,
+    limit_options,
+    progress_bar,
+    size_arg,
+)
 from mimika.errors import DataError, ParameterError
 
 VIEWS = ("front", "three-quarter", "profile")
@@ -76,7 +82,7 @@ def cmd_news(args: argparse.Namespace) -> int:
         raise ParameterError("--audio works with -o, not with --ablations")
     kw = dict(lang=lang, head=args.head, fps=args.fps, size=args.size, view=args.view,
               voice=args.voice, rate=args.rate, samples=args.samples, seed=args.seed,
-              workers=args.workers, mood=args.mood)
+              workers=args.workers, mood=args.mood, light=args.light)
     if args.ablations is not None:
         def prog(name: str, done: int, total: int, _bars: dict = {}) -> None:  # noqa: B006
             bar = _bars.setdefault(name, progress_bar(args.quiet, f"{name:<18}"))
@@ -129,6 +135,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--view", choices=VIEWS, default="front", help="camera (front)")
     p.add_argument("--samples", type=int, default=0,
                    help="multisample anti-aliasing samples (0: fastest)")
+    add_light_arg(p, "news")
     p.add_argument("--seed", type=int, help="random seed of the behaviours")
     p.add_argument("--workers", type=int, metavar="N",
                    help="rendering processes (default: one per core, up to 4, for videos "

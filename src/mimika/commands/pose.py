@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from mimika.commands._util import add_head_arg, progress_bar, size_arg
+from mimika.commands._util import add_head_arg, add_light_arg, progress_bar, size_arg
 from mimika.errors import ParameterError
 
 VIEWS = ("front", "three-quarter", "profile")
@@ -15,6 +15,7 @@ def cmd_pose(args: argparse.Namespace) -> int:
     from mimika.facs import parse_au_values
     from mimika.pose import au_sheet, render_pose
     from mimika.render import save_png
+    from mimika.render.lighting import parse_light
 
     if not args.output.lower().endswith(".png"):
         raise ParameterError(f"output {args.output!r} must be a .png file")
@@ -25,7 +26,8 @@ def cmd_pose(args: argparse.Namespace) -> int:
         from mimika.knowledge.expressions import expression_aus
 
         aus = expression_aus(args.expression, args.intensity)
-    elif args.intensity != 1.0:
+    light = parse_light(args.light)
+    if args.intensity != 1.0 and not args.expression:
         raise ParameterError("--intensity scales an --expression; give one with it")
     for code, value in parse_au_values(args.au or []).items():
         aus[code] = value  # explicit AUs override the expression's
@@ -42,10 +44,11 @@ def cmd_pose(args: argparse.Namespace) -> int:
         identity = args.identity
     _, rig = load_head(args.head, fields=args.fields, identity=identity)
     if args.grid:
-        img = au_sheet(head=rig, view=args.view, columns=args.columns,
+        img = au_sheet(head=rig, view=args.view, columns=args.columns, lighting=light,
                        progress=progress_bar(args.quiet, "rendering AUs"))
     else:
-        img = render_pose(aus, head=rig, view=args.view, size=args.size, samples=args.samples)
+        img = render_pose(aus, head=rig, view=args.view, size=args.size, samples=args.samples,
+                          lighting=light)
     save_png(img, args.output)
     if not args.quiet:
         print(f"wrote {args.output} ({img.shape[1]}x{img.shape[0]})")
@@ -70,6 +73,7 @@ def register(sub) -> None:
     q.add_argument("--size", type=size_arg, default=(640, 480), help="WIDTHxHEIGHT (640x480)")
     q.add_argument("--samples", type=int, default=4, choices=(0, 2, 4, 8),
                    help="multisample anti-aliasing samples")
+    add_light_arg(q, "studio")
     q.add_argument("--grid", action="store_true",
                    help="a labelled contact sheet: one tile per modelled AU at full intensity")
     q.add_argument("--columns", type=int, default=8, help="tiles per row for --grid")

@@ -98,8 +98,10 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
     track = _supported(track, rig)
     if ext in (".glb", ".gltf"):
         from mimika.io.gltf import write_gltf
+        from mimika.render.appearance import export_appearance
 
-        write_gltf(out, rig, track)
+        attributes, extras = export_appearance(rig.head)
+        write_gltf(out, rig, track, attributes=attributes, extras=extras)
         last = max(track.n_frames - 1, 1)
         _say(args, f"wrote {out} ({track.n_frames} frames at {track.fps:g} fps, 0–"
                    f"{last / track.fps:.2f} s, {len(track.channels)} animated AUs; in Blender "
@@ -111,8 +113,8 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
     idx = [round(i * (track.n_frames - 1) / max(n - 1, 1)) for i in range(n)]
     pos = rig.deform_batch(track.values[idx], track.channels)
     with Renderer(rig.head, size=args.size) as r:
-        imgs = [r.render({k: v[i] for k, v in pos.items()}, view=args.view)
-                for i in range(len(idx))]
+        imgs = [r.render({k: v[i] for k, v in pos.items()}, view=args.view,
+                         aus=track.frame(j)) for i, j in enumerate(idx)]
     sheet = contact_sheet(imgs, [f"{i / track.fps:.2f} s" for i in idx], columns=args.columns,
                           title=str(track.meta.get("source", "")) or None)
     save_png(sheet, out)

@@ -40,6 +40,7 @@ import logging
 import os
 import struct
 import weakref
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -288,10 +289,17 @@ def with_textures(doc: dict, mats: _Materials) -> None:
                             "wrapT": 33071}]
 
 
-def _object_attributes(b: _Builder, o: Any, uvs: bool) -> tuple[bool, np.ndarray, dict]:
+#: per object, further vertex attributes to write: {object: {glTF attribute: (N, k) array}}
+#: (``COLOR_0`` shading, application-specific ``_NAME`` data)
+Attributes = Mapping[str, Mapping[str, np.ndarray]]
+
+
+def _object_attributes(b: _Builder, o: Any, uvs: bool, extra: Attributes | None = None
+                       ) -> tuple[bool, np.ndarray, dict]:
     """(is an eye, its origin, attributes) of a head object: positions (eyes about their
     centre, which their node carries), normals and, with ``uvs``, texture coordinates (zeros
-    when the object has none). Joints and weights are the caller's."""
+    when the object has none), and ``extra``'s attributes of the object (float). Joints and
+    weights are the caller's."""
     eye = o.category == "eyes" and o.pivot is not None
     origin = np.asarray(o.pivot, float) if eye else np.zeros(3)
     v = ((o.vertices - origin) * SCALE).astype(np.float32)
@@ -301,6 +309,9 @@ def _object_attributes(b: _Builder, o: Any, uvs: bool) -> tuple[bool, np.ndarray
     if uvs:
         attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs if o.uvs is not None else
                                             np.zeros((o.n_vertices, 2)))
+    for key, arr in (extra or {}).get(o.name, {}).items():
+        a = np.ascontiguousarray(arr, np.float32).reshape(o.n_vertices, -1)
+        attrs[key] = b.add(a, f"VEC{a.shape[1]}", _FLOAT, target=_ARRAY)
     return eye, origin, attrs
 
 
@@ -324,13 +335,14 @@ def _object_mesh(b: _Builder, mats: _Materials, o: Any, attrs: dict, targets: li
     return mesh
 
 
-def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = None
-               ) -> tuple[dict, bytes]:
-    """The glTF JSON document and its binary buffer for ``rig``'s head (+ ``track``)."""
+def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = None,
+               attributes: Attributes | None = None) -> tuple[dict, bytes]:
+    """The glTF JSON document and its binary buffer for ``rig``'s head (+ ``track``), with
+    ``attributes`` added to its objects' vertices."""
     if getattr(rig, "skinning", None) is not None:  # a character with a skeleton
         from mimika.io.gltf_skinned import build_skinned_gltf
 
-        return build_skinned_gltf(rig, track, name=name)
+        return build_skinned_gltf(rig, track, name=name, attributes=attributes)
     head: Head = rig.head
     b = _Builder()
     mats = _Materials(b)
@@ -361,7 +373,8 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
     for o in head.objects:
         if not o.parts:
             continue
-        eye, origin, attrs = _object_attributes(b, o, any(mats.textured(p) for p in o.parts))
+        eye, origin, attrs = _object_attributes(b, o, any(mats.textured(p) for p in o.parts),
+                                                attributes)
         if not eye:
             w = np.clip(motion["weights"][o.name], 0.0, 1.0)
             # the larger weight first; a joint slot with zero weight holds joint 0
@@ -486,14 +499,18 @@ def _animation(b: _Builder, track: AUTrack, morph_nodes, eye_nodes, motion, head
     return anim.doc()
 
 
-def write_gltf(path: str | os.PathLike, rig: Rig, track: AUTrack | None = None) -> Path:
+def write_gltf(path: str | os.PathLike, rig: Rig, track: AUTrack | None = None, *,
+               attributes: Attributes | None = None, extras: Mapping | None = None) -> Path:
     """Write ``rig``'s head (and ``track``'s animation) to ``path`` — ``.glb`` or ``.gltf`` —
-    atomically. Returns the path."""
+    atomically, with ``attributes`` added to its objects' vertices and ``extras`` to the
+    document's. Returns the path."""
     p = Path(path)
     ext = p.suffix.lower()
     if ext not in (".glb", ".gltf"):
         raise ParameterError(f"glTF output {str(p)!r} must end in .glb or .gltf")
-    doc, binary = build_gltf(rig, track, name=p.stem)
+    doc, binary = build_gltf(rig, track, name=p.stem, attributes=attributes)
+    if extras:
+        doc["extras"] = {**doc.get("extras", {}), **extras}
     return save_gltf(p, doc, binary)
 
 

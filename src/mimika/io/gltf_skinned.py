@@ -49,8 +49,8 @@ def _morph_codes(rig: Any) -> list[str]:
             if AU_CATALOGUE[c[:4]].group != "head" and rig.shape_deltas(c)]
 
 
-def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | None = None
-                       ) -> tuple[dict, bytes]:
+def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | None = None,
+                       attributes: Any = None) -> tuple[dict, bytes]:
     """The glTF document and binary buffer of a skinned character (+ ``track``)."""
     sk = rig.skinning
     bind = rig.bind_head
@@ -90,7 +90,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
     for o in bind.objects:
         if not o.parts:
             continue
-        eye, origin, attrs = _object_attributes(b, o, o.uvs is not None)
+        eye, origin, attrs = _object_attributes(b, o, o.uvs is not None, attributes)
         if not eye:
             joints, wts = _top4(sk.weights[o.name])
             attrs["JOINTS_0"] = b.add(joints, "VEC4", _USHORT, target=_ARRAY)

@@ -285,7 +285,7 @@ class Controller:
         with Renderer(rig.head, size=tile) as r:
             for k in range(d * n):
                 aus = _supported(dict(zip(chans, flat[k].tolist(), strict=True)), rig)
-                images.append(r.render(rig.deform(aus), view=view))
+                images.append(r.render(rig.deform(aus), view=view, aus=aus))
                 if progress:
                     progress(k + 1, d * n)
         return images
@@ -319,7 +319,7 @@ class Controller:
         rig = _rig(head)
         aus = _supported(self.sample(z, label), rig)
         with Renderer(rig.head, size=size) as r:
-            return r.render(rig.deform(aus), view=view)
+            return r.render(rig.deform(aus), view=view, aus=aus)
 
 
 def _rig(head: Any):

@@ -66,7 +66,7 @@ def transition_png(track: AUTrack, path: str | os.PathLike, *, title: str = "",
                 for i in idx:
                     aus = rig.check({c: float(v) for c, v in track.frame(int(i)).items()
                                      if c in set(rig.supported) and v > 1e-4})
-                    imgs.append(r.render(rig.deform(aus), view="front"))
+                    imgs.append(r.render(rig.deform(aus), view="front", aus=aus))
                     labels.append(f"{i / track.fps:.2f} s")
             strip = contact_sheet(imgs, labels, columns=frames)
             w = plot.shape[1]

@@ -210,15 +210,17 @@ def news_camera(head: Any, view: str, aspect: float) -> Any:
 def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str = "front",
                   samples: int = 0, skin_shader: bool = True, hair: bool = True,
                   chunk: int = 50, workers: int | None = 1,
-                  timings: dict[str, float] | None = None):
+                  timings: dict[str, float] | None = None, light: Any = None):
     """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head.
 
     Frames are deformed and drawn in chunks of ``chunk`` by ``workers`` processes
     (:mod:`mimika.render.parallel`; None: one per core for long tracks). The images do not
-    depend on ``workers``. ``hair=False`` leaves the hair out.
+    depend on ``workers``. ``hair=False`` leaves the hair out. ``light``: a ``--light``
+    spec or :class:`~mimika.render.lighting.Lighting` (default: the ``news`` set).
     """
+    from mimika.render.lighting import parse_light
     from mimika.render.parallel import default_workers, render_track
-    from mimika.render.skin import NEWS_LIGHTING, SkinParams
+    from mimika.render.skin import SkinParams
 
     tm = timings if timings is not None else {}
     w, h = size
@@ -228,7 +230,8 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
     # video: the blurred skin irradiance is refreshed every third frame (see SkinParams)
     skin = SkinParams(refresh=3) if skin_shader else False
     frames = render_track(rig, track.values, track.channels, camera=cam, size=size,
-                          samples=samples, skin=skin, lighting=NEWS_LIGHTING, chunk=chunk,
+                          samples=samples, skin=skin, lighting=parse_light(light, "news"),
+                          chunk=chunk,
                           workers=workers,
                           hidden=() if hair else [o.name for o in rig.head.objects
                                                   if o.name == "hair"])
@@ -251,7 +254,7 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
                 aus: str | os.PathLike | None = None, crf: int = 23,
                 preset: str = "veryfast", rig: Any = None, news: NewsTrack | None = None,
                 workers: int | None = None, audio: str | os.PathLike | None = None,
-                mood: str | None = None) -> NewsResult:
+                mood: str | None = None, light: Any = None) -> NewsResult:
     """Read ``text`` (plain article or ``<speak>`` script) as a newsreader into an MP4.
 
     Writes ``out`` (H.264 yuv420p + AAC, ``fps`` frames/s, frame i showing time i / fps, video
@@ -263,7 +266,7 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     more than one, call this from a script under ``if __name__ == "__main__":``.
     ``audio``: a recording of the text (WAV, MP3 … any voice) — the text is aligned to it and
     the video carries it unchanged, so the video lasts exactly as long as the recording.
-    ``mood``: see :func:`news_track`.
+    ``mood``: see :func:`news_track`. ``light``: a ``--light`` spec (default ``news``).
     """
     from mimika.render.video import VideoWriter
 
@@ -274,6 +277,9 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         raise ParameterError(f"size={w}x{h}: width and height must be even for H.264 video")
     enabled = check_layers(layers)
     fps = valid_fps(fps)
+    from mimika.render.lighting import parse_light
+
+    light = parse_light(light, "news")
     if news is None:  # refuse an article too long to say before loading anything
         limits.check_speech(text if isinstance(text, str) else text.text, rate, "the article")
     tm: dict[str, float] = {}
@@ -318,7 +324,7 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         sound[: min(len(sound), len(utt.audio))] = utt.audio[: len(sound)]
     frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
                            skin_shader="skin" in enabled, hair="hair" in enabled,
-                           workers=workers, timings=tm)
+                           workers=workers, timings=tm, light=light)
     # closing: an interrupted render stops its worker processes at once
     with VideoWriter(out, fps=fps, size=(w, h), audio=sound, sr=utt.sr, crf=crf,
                      preset=preset) as vw, contextlib.closing(frames):

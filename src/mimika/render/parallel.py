@@ -48,7 +48,8 @@ def _draw(renderer: Any, rig: Any, values: np.ndarray, channels: Sequence[str],
     renderer.invalidate()
     pos = rig.deform_batch(values, channels)
     for i in range(len(values)):
-        yield renderer.render({n: p[i] for n, p in pos.items()}, camera=camera)
+        yield renderer.render({n: p[i] for n, p in pos.items()}, camera=camera,
+                              aus=dict(zip(channels, values[i].tolist(), strict=True)))
 
 
 def _watch_parent(ppid: int) -> None:

@@ -1,8 +1,11 @@
 """Headless OpenGL renderer for a :class:`~mimika.face.head.Head`.
 
 Each frame recomputes smooth vertex normals from the given positions (one sparse
-vertex–face product per object), rewrites a dynamic vertex buffer, draws every part with its
-material into a multisample framebuffer over a studio backdrop, resolves and reads back RGB.
+vertex–face product per object) and the light reaching the inside of the mouth through the
+lips (:mod:`.mouth`), rewrites a dynamic vertex buffer, draws the key light's shadow map, then
+every part with its material into a multisample framebuffer over a studio backdrop, resolves
+and reads back RGB. Ambient occlusion is baked once per head (:mod:`.occlusion`); the lights
+come from a :class:`~mimika.render.lighting.Lighting` (``--light``).
 """
 
 from __future__ import annotations
@@ -23,18 +26,21 @@ from mimika.errors import ParameterError, RenderError
 from mimika.face.head import Head, MeshObject
 from mimika.render.camera import Camera, check_view, frame_head
 from mimika.render.context import get_context, render_lock
+from mimika.render.lighting import Lighting, parse_light, set_lights, unit
+from mimika.render.mouth import MouthCavity
+from mimika.render.occlusion import light_view, ortho
+from mimika.render.skin import VERTEX_ATTRIBUTES, VERTEX_LAYOUT
+from mimika.render.wrinkles import Wrinkles
 
 log = logging.getLogger(__name__)
 
-# Lights in camera space (x right, y up, +z toward the viewer); colours are linear.
-KEY_DIR, KEY_COL = (-0.55, 0.55, 0.62), (1.0, 0.93, 0.85)
-FILL_DIR, FILL_COL = (0.75, 0.05, 0.55), (0.30, 0.34, 0.40)
-RIM_DIR, RIM_COL = (0.45, 0.55, -0.7), (0.55, 0.55, 0.6)
-SKY, GROUND = (0.24, 0.26, 0.30), (0.10, 0.085, 0.075)
-EXPOSURE = 1.05
 BACKFACE = 0.3  # brightness of back faces (the inside of the skin seen through openings)
-# Backdrop, sRGB.
-BG_TOP, BG_BOTTOM, BG_GLOW = (0.25, 0.28, 0.33), (0.09, 0.10, 0.12), (0.05, 0.055, 0.06)
+#: materials that take the colour of the oral mucosa inside the mouth
+SKIN_LIKE = ("skin", "lips", "skin_body")
+#: linear colour of the oral mucosa (sRGB #a5524f)
+MUCOSA = (0.376, 0.085, 0.077)
+#: the key light's penumbra (cm) for soft and hard shadows
+PENUMBRA = {"soft": 0.45, "hard": 0.1}
 
 
 def srgb_to_linear(hex_color: str) -> tuple[float, float, float]:
@@ -157,7 +163,8 @@ _OPAQUE, _CUT, _FRINGE = 0, 1, 3
 class _GpuObject:
     """GPU state of one drawable object: dynamic VBO, index buffer, VAO and part ranges."""
 
-    def __init__(self, ctx: Any, prog: Any, obj: MeshObject) -> None:
+    def __init__(self, ctx: Any, prog: Any, obj: MeshObject,
+                 face: np.ndarray | None = None) -> None:
         self.name = obj.name
         self.n_vertices = obj.n_vertices
         faces = np.concatenate([p.faces for p in obj.parts]).astype(np.int32)
@@ -195,14 +202,25 @@ class _GpuObject:
             self.parts.append((material(p.material), first, 3 * len(p.faces), tex,
                                p.alpha_mode if tex is not None else "opaque"))
             first += 3 * len(p.faces)
-        self.interleaved = np.empty((obj.n_vertices, 6), np.float32)
+        #: position, normal, occlusion (ambient occlusion, mouth visibility, inside the mouth)
+        self.interleaved = np.empty((obj.n_vertices, 9), np.float32)
+        self.interleaved[:, 6:] = (1.0, 1.0, 0.0)
+        #: vertices inside the mouth and their visibility this frame (set by the renderer)
+        self.inside_ids: np.ndarray | None = None
         self.vbo = ctx.buffer(reserve=self.interleaved.nbytes, dynamic=True)
         self.ibo = ctx.buffer(faces.tobytes())
-        layout = [(self.vbo, "3f 3f", "in_position", "in_normal")]
+        layout = [(self.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES)]
         self.uv_vbo = None
         if textured:
             self.uv_vbo = ctx.buffer(np.ascontiguousarray(obj.uvs, np.float32).tobytes())
             layout.append((self.uv_vbo, "2f", "in_uv"))
+        #: face units per vertex for the wrinkles (:mod:`mimika.render.wrinkles`)
+        self.face_vbo = None if face is None else ctx.buffer(
+            np.ascontiguousarray(face, np.float32).tobytes())
+        if self.face_vbo is not None:
+            layout.append((self.face_vbo, "3f", "in_face"))
+        #: the attribute buffers besides the dynamic one (the skin shader's VAOs take them)
+        self.extra_layout = layout[1:]
         # skip_errors: variants without textures have no in_uv attribute
         self.vao = ctx.vertex_array(prog, layout, self.ibo, 4, skip_errors=True)
         self._ctx, self._layout = ctx, layout
@@ -218,24 +236,28 @@ class _GpuObject:
                                                           skip_errors=True)
         return self._vaos[id(prog)]
 
-    def update(self, positions: np.ndarray | None) -> None:
-        """Write ``positions`` (N, 3) and their normals; ``None`` means the rest pose."""
+    def update(self, positions: np.ndarray | None, inside: np.ndarray | None = None) -> None:
+        """Write ``positions`` (N, 3) and their normals, and the visibility of the vertices
+        inside the mouth (``inside``, for :attr:`inside_ids`); ``None`` means the rest pose."""
+        if inside is not None:
+            self.interleaved[self.inside_ids, 7] = inside
         if positions is None:
-            if self.holds_rest:
+            if self.holds_rest and inside is None:
                 return
             positions = self.rest
         self.interleaved[:, :3] = positions
         if self.weld_inv is None:
-            self.interleaved[:, 3:] = vertex_normals(positions, self.corners, self.incidence)
+            self.interleaved[:, 3:6] = vertex_normals(positions, self.corners, self.incidence)
         else:
             n = vertex_normals(np.asarray(positions)[self.first_of], self.corners,
                                self.incidence)
-            self.interleaved[:, 3:] = n[self.weld_inv]
+            self.interleaved[:, 3:6] = n[self.weld_inv]
         self.vbo.write(self.interleaved)
         self.holds_rest = positions is self.rest
 
     def release(self) -> None:
-        for o in (*self._vaos.values(), self.ibo, self.vbo, self.uv_vbo, *self.textures):
+        for o in (*self._vaos.values(), self.ibo, self.vbo, self.uv_vbo, self.face_vbo,
+                  *self.textures):
             if o is not None:
                 o.release()
 
@@ -265,7 +287,11 @@ def _winding_inward(vertices: np.ndarray, faces: np.ndarray) -> bool:
     return float(np.einsum("ij,ij->", fn, (a + b + c) / 3.0 - centre)) < 0.0
 
 
-_GL_KEYS = ("bg_vao", "bg_prog", "fbo", "resolve", "desk_vao", "desk_prog", "bg_fbo")
+_GL_KEYS = ("bg_vao", "bg_prog", "fbo", "resolve", "desk_vao", "desk_prog", "bg_fbo",
+            "shadow_fbo")
+#: texels of the key light's shadow map: soft shadows are filtered over a few texels of a
+#: coarse map, hard ones need a fine one
+SHADOW_MAP = {"soft": 512, "hard": 1536}
 
 
 class Renderer:
@@ -284,7 +310,8 @@ class Renderer:
         objects need UVs), else with the standard shader; a ``SkinParams`` turns it on with
         those settings.
     lighting
-        Lights and backdrop (:class:`mimika.render.skin.Lighting`); default: mimika's look.
+        Lights, shadows, occlusion and backdrop: a :class:`~mimika.render.lighting.Lighting`
+        or a ``--light`` spec (``"studio"``, ``"news,shadows=off"`` …); default: ``studio``.
     hidden
         Names of objects not to draw (e.g. ``("hair",)``).
     crop
@@ -311,7 +338,7 @@ class Renderer:
         self.size = (w, h)
         self.samples = int(samples)
         self.skin_shader = skin_shader
-        self.lighting = lighting
+        self.lighting: Lighting = parse_light(lighting)
         names = {o.name for o in head.objects}
         unknown = sorted(set(hidden) - names)
         if unknown:
@@ -320,6 +347,9 @@ class Renderer:
         self.hidden = frozenset(hidden)
         self.crop = bool(crop)
         self._skin: Any = None
+        self._mouth: MouthCavity | None = None
+        self._wrinkles: Wrinkles | None = None
+        self._wr: bytes | None = None  # this frame's wrinkle depths (u_wr), None if smooth
         self._cameras: dict[str, Camera] = {}
         self._gl: dict[str, Any] | None = None
         self._objects: list[_GpuObject] = []
@@ -343,11 +373,14 @@ class Renderer:
         positions: Mapping[str, np.ndarray] | None = None,
         view: str = "front",
         camera: Camera | None = None,
+        aus: Mapping[str, float] | None = None,
     ) -> np.ndarray:
         """Draw the head and return the image, shape (H, W, 3) uint8 RGB, top row first.
 
         ``positions`` maps object names to vertex positions (N, 3) in cm; objects not in it
-        are drawn at rest. ``camera`` overrides the camera of ``view``.
+        are drawn at rest. ``camera`` overrides the camera of ``view``. ``aus``, the AU
+        intensities the positions were made from, add their appearance changes — furrows
+        and lines (:mod:`mimika.render.wrinkles`); without them the skin stays smooth.
         """
         cam = camera if camera is not None else self.camera(view)
         pos = self._check_positions(positions)
@@ -356,12 +389,19 @@ class Renderer:
         # other threads out while this frame is drawn (GL contexts are not thread-safe)
         with render_lock, ctx:
             gl = self._setup(cam)
+            self._wr = None
+            if self._wrinkles is not None:
+                w = self._wrinkles.weights(aus)
+                self._wr = w.tobytes() if w.any() else None
             return self._draw(gl, ctx, cam, pos)
 
     def _draw(self, gl: dict, ctx: Any, cam: Camera, pos: dict) -> np.ndarray:
         try:
+            inside = {} if self._mouth is None else self._mouth.visibility(pos)
             for o in self._objects:
-                o.update(pos.get(o.name))
+                o.update(pos.get(o.name), inside.get(o.name))
+            if "shadow_fbo" in gl:
+                self._shadow_pass(gl, ctx, cam)
             skin = self._skin
             if skin is not None:
                 skin.prepare(ctx, cam.view_matrix)
@@ -395,6 +435,10 @@ class Renderer:
                     else:
                         ctx.disable(ctx.CULL_FACE)
                     if skin is not None and skin.handles(o, first):
+                        if "u_wr" in skin.final:
+                            skin.final["u_wr"].write(self._wr if self._wr is not None
+                                                     and o.face_vbo is not None else
+                                                     bytes(4 * 28))
                         skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE, tex)
                         continue
                     self._part(gl, o, mat, tex, _OPAQUE).render(ctx.TRIANGLES, vertices=count,
@@ -525,50 +569,165 @@ class Renderer:
                             ("u_shininess", m.shininess), ("u_wrap", m.wrap),
                             ("u_scatter", m.scatter), ("u_alpha", m.alpha),
                             ("u_alpha_mode", mode),
-                            ("u_backface", BACKFACE if mode == _OPAQUE else 1.0)):
+                            ("u_backface", BACKFACE if mode == _OPAQUE else 1.0),
+                            ("u_tint", float(m.name in SKIN_LIKE))):
             if name in prog:  # a variant may have compiled a uniform away
                 prog[name].value = value
         if tex is not None:
             tex.use(location=0)
             prog["u_tex"].value = 0
 
-    def _program(self, gl: dict, textured: bool, hair: bool, depth_only: bool = False) -> Any:
+    @property
+    def _shadows(self) -> bool:
+        return self.lighting.shadows != "off"
+
+    def _program(self, gl: dict, textured: bool, hair: bool, depth_only: bool = False,
+                 wrinkled: bool = False) -> Any:
         """The mesh program variant: ``textured``, ``hair`` (strand shading), ``depth_only``
-        (texture coverage only, for a depth pre-pass); compiled on first use with the lights
-        set."""
-        key = ("TEXTURED",) * textured + ("HAIR",) * hair + ("DEPTH_ONLY",) * depth_only
+        (texture coverage only, for a depth pre-pass), ``wrinkled`` (the skin's appearance
+        changes); compiled on first use with the lights set."""
+        key = (("TEXTURED",) * textured + ("HAIR",) * hair + ("DEPTH_ONLY",) * depth_only
+               + ("SHADOWS",) * (self._shadows and not depth_only)
+               + ("WRINKLES",) * (wrinkled and not depth_only))
         progs = gl["progs"]
         if key not in progs:
             ctx = gl["ctx"]
-            p = ctx.program(vertex_shader=_shader("mesh.vert.glsl"),
+            shadows = ("SHADOWS",) if "SHADOWS" in key else ()
+            p = ctx.program(vertex_shader=_shader("mesh.vert.glsl", *shadows),
                             fragment_shader=_shader("mesh.frag.glsl", *key))
-            for name, value in (
-                ("u_key_dir", _unit(KEY_DIR)), ("u_key_col", KEY_COL),
-                ("u_fill_dir", _unit(FILL_DIR)), ("u_fill_col", FILL_COL),
-                ("u_rim_dir", _unit(RIM_DIR)), ("u_rim_col", RIM_COL),
-                ("u_sky", SKY), ("u_ground", GROUND), ("u_exposure", EXPOSURE),
-                ("u_backface", BACKFACE),
-            ):
+            set_lights(p, self.lighting)
+            for name, value in (("u_backface", BACKFACE), ("u_mucosa", MUCOSA)):
                 if name in p:  # the depth-only variant has no lights
                     p[name].value = value
-            if self.lighting is not None:
-                from mimika.render.skin import set_lights
-
-                set_lights(p, self.lighting)
             if getattr(self, "_view", None) is not None:
                 p["u_view"].write(self._view[0])
                 p["u_proj"].write(self._view[1])
+            if shadows and "shadow" in gl:
+                self._set_shadow(p, gl["shadow"])
+            if "WRINKLES" in key:
+                self._set_landmarks(p)
             progs[key] = p
         return progs[key]
+
+    def _depth_program(self, gl: dict, textured: bool) -> Any:
+        """The depth-only program (shadow map, occlusion views); ``textured`` cuts at alpha
+        0.5."""
+        key = ("DEPTH", textured)
+        if key not in gl["progs"]:
+            defines = ("TEXTURED",) if textured else ()
+            gl["progs"][key] = gl["ctx"].program(
+                vertex_shader=_shader("depth.vert.glsl"),
+                fragment_shader=_shader("depth.frag.glsl", *defines))
+        return gl["progs"][key]
+
+    def _draw_depth(self, gl: dict, view: np.ndarray, proj: np.ndarray) -> None:
+        """Every opaque, cut-out and blended part's depth (not glass), seen by ``view``."""
+        ctx = gl["ctx"]
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.disable(ctx.CULL_FACE | ctx.BLEND)
+        vb, pb = view.T.astype("f4").tobytes(), proj.T.astype("f4").tobytes()
+        for textured in (False, True):
+            prog = self._depth_program(gl, textured)
+            prog["u_view"].write(vb)
+            prog["u_proj"].write(pb)
+            for o in self._objects:
+                for mat, first, count, tex, mode in o.parts:
+                    if mat.alpha < 1.0 or (mode != "opaque") != textured:
+                        continue
+                    if textured:
+                        tex.use(location=0)
+                        prog["u_tex"].value = 0
+                    o.vao_for(prog).render(ctx.TRIANGLES, vertices=count, first=first)
+
+    def _shadow_pass(self, gl: dict, ctx: Any, cam: Camera) -> None:
+        """The key light's depth map over what ``cam`` sees, and its uniforms everywhere."""
+        sh = gl["shadow_fbo"]
+        view_rot = cam.view_matrix[:3, :3]
+        key = view_rot.T @ np.asarray(unit(self.lighting.key_dir))  # camera → world
+        dist = float(np.linalg.norm(cam.eye - cam.target))
+        h = 2.0 * dist * np.tan(np.radians(cam.fov_y) / 2.0)
+        half = 0.55 * h * max(1.0, cam.aspect)
+        view = light_view(key, cam.target, gl["extent"] + half)
+        proj = ortho(half, 0.0, 2.0 * (gl["extent"] + half))
+        size = sh.size[0]
+        texel = 2.0 * half / size
+        sh.use()
+        ctx.viewport = (0, 0, size, size)
+        sh.clear(depth=1.0)
+        self._draw_depth(gl, view, proj)
+        # sampled toward the light and along the normal (against acne): the wider the
+        # filter, the farther its taps reach over a curved surface, the more
+        pen = PENUMBRA[self.lighting.shadows]
+        toward = np.eye(4)
+        toward[2, 3] = 1.5 * texel + 0.6 * pen
+        gl["shadow"] = {"u_shadow_matrix": (proj @ toward @ view).T.astype("f4").tobytes(),
+                        "u_shadow_offset": 1.5 * texel + 0.3 * pen,
+                        "u_shadow_radius": pen / texel,
+                        "u_shadow_texel": (1.0 / size, 1.0 / size)}
+        gl["shadow_tex"].use(location=3)
+        progs = [p for k, p in gl["progs"].items() if "SHADOWS" in k]
+        if self._skin is not None:
+            progs += [self._skin.irr, self._skin.final]
+        for p in progs:
+            self._set_shadow(p, gl["shadow"])
+
+    @staticmethod
+    def _set_shadow(prog: Any, shadow: dict) -> None:
+        for name, value in shadow.items():
+            if name not in prog:
+                continue
+            if name == "u_shadow_matrix":
+                prog[name].write(value)
+            else:
+                prog[name].value = value
+        if "u_shadow_map" in prog:
+            prog["u_shadow_map"].value = 3
+
+    def _set_landmarks(self, prog: Any) -> None:
+        for name, value in self._wrinkles.uniforms.items():
+            if name in prog:
+                prog[name].value = value
 
     def _part(self, gl: dict, o: _GpuObject, mat: Material, tex: Any, mode: int,
               depth_only: bool = False) -> Any:
         """Set up the program for one part and return the object's vertex array for it."""
         textured = tex is not None
+        wrinkled = (self._wr is not None and o.face_vbo is not None
+                    and mat.name in SKIN_LIKE)
         prog = self._program(gl, textured, textured and mat.model == "hair",
-                             textured and depth_only)
+                             textured and depth_only, wrinkled)
         self._set_material(prog, mat, tex, mode)
+        if wrinkled:
+            prog["u_wr"].write(self._wr)
         return o.vao_for(prog)
+
+    def _shadow_size(self, crop: Camera | None) -> tuple[int, int]:
+        n = SHADOW_MAP[self.lighting.shadows]
+        return (n, n)
+
+    def _occlusion(self, gl: dict, ctx: Any) -> None:
+        """Find the inside of the mouth and bake the ambient occlusion (when the lighting
+        uses it) into the objects' vertex buffers, which hold the rest pose."""
+        from mimika.render import occlusion
+        from mimika.render.camera import face_frame
+
+        centre, height, _ = face_frame(self.head)
+        pts = np.concatenate([o.rest for o in self._objects])
+        gl["extent"] = float(np.linalg.norm(pts - centre, axis=1).max())
+        self._mouth = MouthCavity(self.head)
+        for o in self._objects:
+            if o.name in self._mouth.ids:
+                o.inside_ids = self._mouth.ids[o.name]
+                o.interleaved[o.inside_ids, 8] = self._mouth.inside[o.name]
+        if self.lighting.ao > 0:
+            key = (id(self.head), tuple(o.name for o in self._objects))
+            ao = occlusion.bake(key, ctx, self._objects,
+                                lambda view, proj: self._draw_depth(gl, view, proj),
+                                centre, 1.2 * height, gl["extent"])
+            for o in self._objects:
+                o.interleaved[:, 6] = ao[o.name]
+        for o in self._objects:
+            o.vbo.write(o.interleaved)
 
     def _setup(self, cam: Camera | None = None) -> dict[str, Any]:
         if self._gl is not None:
@@ -588,16 +747,16 @@ class Renderer:
         gl["progs"] = {}
         prog = self._program(gl, False, False)
         lit = self.lighting
-        studio = lit is not None and lit.backdrop == "studio"
+        studio = lit.backdrop == "studio"
         bg = ctx.program(
             vertex_shader=_shader("background.vert.glsl"),
             fragment_shader=_shader("studio.frag.glsl" if studio else "background.frag.glsl"),
         )
-        bg["u_top"].value = BG_TOP if lit is None else lit.bg_top
-        bg["u_bottom"].value = BG_BOTTOM if lit is None else lit.bg_bottom
-        bg["u_glow"].value = BG_GLOW if lit is None else lit.bg_glow
+        bg["u_top"].value = lit.bg_top
+        bg["u_bottom"].value = lit.bg_bottom
+        bg["u_glow"].value = lit.bg_glow
         bg["u_aspect"].value = self.aspect
-        if lit is not None and lit.desk > 0:
+        if lit.desk > 0:
             desk = ctx.program(vertex_shader=_shader("background.vert.glsl"),
                                fragment_shader=_shader("desk.frag.glsl"))
             desk["u_top"].value = lit.desk
@@ -629,15 +788,33 @@ class Renderer:
         shown = [o for o in self.head.objects if o.name not in self.hidden]
         if crop is not None:
             shown = [_in_shot(o, crop, self.size) for o in shown]
-        self._objects = [_GpuObject(ctx, prog, o) for o in shown if o.parts]
+        self._wrinkles = Wrinkles(self.head)
+        lmo = self.head.landmark_object
+        self._objects = [_GpuObject(ctx, prog, o, self._wrinkles.face if o.name == lmo else None)
+                         for o in shown if o.parts]
+        for o in self._objects:
+            o.update(None)
+        self._occlusion(gl, ctx)
+        if self._shadows:
+            tex = ctx.depth_texture(self._shadow_size(crop))
+            tex.compare_func = "<="
+            tex.filter = (ctx.LINEAR, ctx.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            gl["attachments"].append(tex)
+            gl["shadow_tex"] = tex
+            gl["shadow_fbo"] = ctx.framebuffer(depth_attachment=tex)
         if self.skin_shader:
-            from mimika.render.skin import DEFAULT_LIGHTING, SkinShader
+            from mimika.render.skin import SkinShader
 
             uvs = {o.name: o.uvs for o in self.head.objects if o.uvs is not None}
             if uvs:
                 params = None if isinstance(self.skin_shader, bool) else self.skin_shader
-                self._skin = SkinShader(ctx, self._objects, uvs, lit or DEFAULT_LIGHTING,
-                                        params)
+                self._skin = SkinShader(ctx, self._objects, uvs, lit, params,
+                                        ("SHADOWS",) if self._shadows else (), ("WRINKLES",))
+                for p in (self._skin.irr, self._skin.final):
+                    if "u_mucosa" in p:
+                        p["u_mucosa"].value = MUCOSA
+                self._set_landmarks(self._skin.final)
             else:
                 log.warning("head %r has no UVs: skin shader off", self.head.name)
         log.debug(
@@ -662,8 +839,3 @@ def _in_shot(obj: MeshObject, cam: Camera, size: tuple[int, int]) -> MeshObject:
     parts = (replace(p, faces=p.faces[~out[p.faces].all(axis=1)]) for p in obj.parts)
     return replace(obj, parts=tuple(p for p in parts if len(p.faces)))
 
-
-def _unit(v: tuple[float, float, float]) -> tuple[float, float, float]:
-    a = np.asarray(v, np.float64)
-    a = a / np.linalg.norm(a)
-    return (float(a[0]), float(a[1]), float(a[2]))

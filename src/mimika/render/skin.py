@@ -1,4 +1,4 @@
-"""Texture-space skin shading (seed 004 §4.6) and studio lighting presets.
+"""Texture-space skin shading (seed 004 §4.6).
 
 The skin shader runs in three passes per frame:
 
@@ -24,57 +24,16 @@ from typing import Any
 
 import numpy as np
 
+from mimika.render.lighting import V3, Lighting, set_lights
+
 log = logging.getLogger(__name__)
 
 #: materials drawn with the skin shader
 SKIN_MATERIALS = ("skin", "lips")
-
-V3 = tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class Lighting:
-    """Lights in camera space (x right, y up, +z toward the viewer), linear colours; backdrop
-    colours sRGB. ``backdrop``: ``plain`` (grey-blue gradient) or ``studio`` (news set);
-    ``desk``: the height (fraction of the image) of a foreground news desk, 0 for none."""
-
-    key_dir: V3 = (-0.55, 0.55, 0.62)
-    key_col: V3 = (1.0, 0.93, 0.85)
-    fill_dir: V3 = (0.75, 0.05, 0.55)
-    fill_col: V3 = (0.30, 0.34, 0.40)
-    rim_dir: V3 = (0.45, 0.55, -0.7)
-    rim_col: V3 = (0.55, 0.55, 0.6)
-    sky: V3 = (0.24, 0.26, 0.30)
-    ground: V3 = (0.10, 0.085, 0.075)
-    exposure: float = 1.05
-    bg_top: V3 = (0.25, 0.28, 0.33)
-    bg_bottom: V3 = (0.09, 0.10, 0.12)
-    bg_glow: V3 = (0.05, 0.055, 0.06)
-    backdrop: str = "plain"
-    desk: float = 0.0
-
-
-#: mimika's default look (the renderer's constants)
-DEFAULT_LIGHTING = Lighting()
-
-#: the newsreader studio: a warm key (the seed 004 survey asked for warmer light), softer
-#: fill, warm rim, blue set behind, desk in front
-NEWS_LIGHTING = Lighting(
-    key_dir=(-0.62, 0.5, 0.6),
-    key_col=(1.06, 0.86, 0.66),
-    fill_dir=(0.8, 0.1, 0.6),
-    fill_col=(0.22, 0.23, 0.28),
-    rim_dir=(0.55, 0.6, -0.6),
-    rim_col=(0.62, 0.52, 0.42),
-    sky=(0.20, 0.205, 0.23),
-    ground=(0.11, 0.085, 0.07),
-    exposure=1.08,
-    bg_top=(0.10, 0.15, 0.24),
-    bg_bottom=(0.025, 0.035, 0.06),
-    bg_glow=(0.09, 0.075, 0.06),
-    backdrop="studio",
-    desk=0.085,
-)
+#: the renderer's dynamic vertex buffer: position, normal, occlusion (ambient occlusion,
+#: visibility through the mouth opening, inside the mouth)
+VERTEX_LAYOUT = "3f 3f 3f"
+VERTEX_ATTRIBUTES = ("in_position", "in_normal", "in_occ")
 
 
 @dataclass(frozen=True)
@@ -96,23 +55,6 @@ class SkinParams:
     dtype: str = "f2"
     cull: bool = True
     refresh: int = 1  #: recompute the blurred irradiance every ``refresh`` frames (video: 3)
-
-
-def unit(v: V3) -> V3:
-    a = np.asarray(v, np.float64)
-    a = a / np.linalg.norm(a)
-    return (float(a[0]), float(a[1]), float(a[2]))
-
-
-def set_lights(prog: Any, lighting: Lighting) -> None:
-    """Write ``lighting``'s lights into ``prog``'s uniforms (those it has)."""
-    vals = {"u_key_dir": unit(lighting.key_dir), "u_key_col": lighting.key_col,
-            "u_fill_dir": unit(lighting.fill_dir), "u_fill_col": lighting.fill_col,
-            "u_rim_dir": unit(lighting.rim_dir), "u_rim_col": lighting.rim_col,
-            "u_sky": lighting.sky, "u_ground": lighting.ground, "u_exposure": lighting.exposure}
-    for k, v in vals.items():
-        if k in prog:
-            prog[k].value = v
 
 
 def seam_faces(uv: np.ndarray, faces: np.ndarray, *, limit: float = 0.25) -> np.ndarray:
@@ -143,8 +85,10 @@ class _SkinObject:
             if not len(good):
                 continue
             ibo = ctx.buffer(good.tobytes())
-            vaos = [ctx.vertex_array(p, [(gpu.vbo, "3f 3f", "in_position", "in_normal"),
-                                         (self.uv_vbo, "2f", "in_uv")], ibo, 4) for p in progs]
+            face = [(gpu.face_vbo, "3f", "in_face")] if gpu.face_vbo is not None else []
+            vaos = [ctx.vertex_array(p, [(gpu.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES),
+                                         (self.uv_vbo, "2f", "in_uv"), *face], ibo, 4,
+                                     skip_errors=True) for p in progs]
             self.parts[first] = (ibo, vaos[0], vaos[1], 3 * len(good))
             if self.mask is None:
                 self.mask = np.zeros(len(uv), bool)
@@ -152,9 +96,9 @@ class _SkinObject:
             if seam.any():
                 bad = np.ascontiguousarray(f[seam], np.int32)
                 ib2 = ctx.buffer(bad.tobytes())
-                vao = ctx.vertex_array(progs[1], [(gpu.vbo, "3f 3f", "in_position",
-                                                   "in_normal"), (self.uv_vbo, "2f", "in_uv")],
-                                       ib2, 4)
+                vao = ctx.vertex_array(progs[1], [(gpu.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES),
+                                                  (self.uv_vbo, "2f", "in_uv"), *face], ib2,
+                                       4, skip_errors=True)
                 self.rest_parts[first] = (ib2, vao, 3 * len(bad))
                 log.debug("skin: %d seam triangles of %r drawn without the blurred light",
                           int(seam.sum()), gpu.name)
@@ -177,18 +121,20 @@ class SkinShader:
     """
 
     def __init__(self, ctx: Any, objects: list[Any], uvs: dict[str, np.ndarray],
-                 lighting: Lighting, params: SkinParams | None = None) -> None:
+                 lighting: Lighting, params: SkinParams | None = None,
+                 defines: tuple[str, ...] = (), final_defines: tuple[str, ...] = ()) -> None:
         from mimika.render.renderer import _shader
 
         self.params = p = params or SkinParams()
         self.lighting = lighting
         self.ctx = ctx
-        self.irr = ctx.program(vertex_shader=_shader("skin_irradiance.vert.glsl"),
-                               fragment_shader=_shader("skin_irradiance.frag.glsl"))
+        self.irr = ctx.program(vertex_shader=_shader("skin_irradiance.vert.glsl", *defines),
+                               fragment_shader=_shader("skin_irradiance.frag.glsl", *defines))
         self.blur = ctx.program(vertex_shader=_shader("background.vert.glsl"),
                                 fragment_shader=_shader("skin_blur.frag.glsl"))
-        self.final = ctx.program(vertex_shader=_shader("skin_final.vert.glsl"),
-                                 fragment_shader=_shader("skin_final.frag.glsl"))
+        fd = (*defines, *final_defines)
+        self.final = ctx.program(vertex_shader=_shader("skin_final.vert.glsl", *fd),
+                                 fragment_shader=_shader("skin_final.frag.glsl", *fd))
         for prog in (self.irr, self.final):
             set_lights(prog, lighting)
         # one UV frame for all skin parts: their bounding box → [0, 1]²
@@ -292,7 +238,7 @@ class SkinShader:
         lo = np.array([np.inf, np.inf])
         hi = -lo
         for so in self.objects.values():
-            pos, nrm = so.gpu.interleaved[:, :3], so.gpu.interleaved[:, 3:]
+            pos, nrm = so.gpu.interleaved[:, :3], so.gpu.interleaved[:, 3:6]
             vis = np.einsum("ij,ij->i", nrm, eye[None, :] - pos) > 0.0
             if so.mask is not None:
                 vis &= so.mask

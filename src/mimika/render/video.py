@@ -247,7 +247,7 @@ def write_track_video(rig: Any, track: Any, path: str | os.PathLike, *,
     with Renderer(rig.head, size=(w, h), samples=samples) as r, \
             VideoWriter(path, fps=track.fps, size=(w, h), audio=audio, sr=sr) as out:
         for i, pos in enumerate(rig.deform_track(track)):
-            out.write(r.render(pos, view=view))
+            out.write(r.render(pos, view=view, aus=track.frame(i)))
             if progress is not None:
                 progress(i + 1, track.n_frames)
     return Path(path)

@@ -16,16 +16,17 @@ FILL = {"plain": 0.75, "news": 0.62}
 
 
 def lighting(look: str) -> Any:
-    from mimika.render.skin import DEFAULT_LIGHTING, NEWS_LIGHTING
+    from mimika.render.lighting import NEWS, STUDIO
 
-    return NEWS_LIGHTING if look == "news" else DEFAULT_LIGHTING
+    return NEWS if look == "news" else STUDIO
 
 
 def look_info() -> dict[str, Any]:
     """Everything the page's materials need to draw like the renderer."""
     from mimika.render.camera import FOV_Y, VIEW_ANGLES
+    from mimika.render.lighting import unit
     from mimika.render.renderer import BACKFACE, load_materials
-    from mimika.render.skin import SKIN_MATERIALS, SkinParams, unit
+    from mimika.render.skin import SKIN_MATERIALS, SkinParams
 
     looks = {}
     for name in FILL:
@@ -53,7 +54,7 @@ def look_info() -> dict[str, Any]:
 
 #: the renderer's shaders the page runs as they are (backdrops, desk, the skin's light)
 SHADERS = ("background.vert", "background.frag", "studio.frag", "desk.frag", "lights",
-           "skin_light")
+           "skin_light", "wrinkles")
 
 
 def _shader(name: str) -> str:

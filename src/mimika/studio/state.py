@@ -69,10 +69,13 @@ class SpeechEntry:
 def gltf_bytes(rig: Any, track: Any, *, name: str = "mimika") -> bytes:
     """``rig``'s head (+ ``track``'s animation) as GLB bytes, through :func:`write_gltf`."""
     from mimika.io.gltf import write_gltf
+    from mimika.render.appearance import export_appearance
     from mimika.studio.jobs import temp_dir
 
     with temp_dir() as d:
-        return write_gltf(d / f"{name}.glb", rig, track).read_bytes()
+        attributes, extras = export_appearance(rig.head)
+        return write_gltf(d / f"{name}.glb", rig, track, attributes=attributes,
+                          extras=extras).read_bytes()
 
 
 def speech_key(text: str, lang: str, rate: int) -> str:

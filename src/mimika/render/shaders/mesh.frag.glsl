@@ -3,12 +3,24 @@
 // rim light from behind, hemispheric ambient. Wrap diffuse with a scatter tint for skin,
 // normalised Blinn-Phong specular (key and fill). Linear lighting, sRGB output.
 // Kept cheap: it runs per pixel on llvmpipe (no pow in the sRGB encode, one pow per light).
+// Occlusion: ambient occlusion (baked at rest) darkens the ambient, fill and rim light; inside
+// the mouth, the visibility through the lip opening darkens every light, and skin there takes
+// the colour of the oral mucosa; the key light casts soft shadows (SHADOWS).
 // Compiled in variants (llvmpipe pays for both sides of a branch on a uniform): TEXTURED for
 // parts with a texture, HAIR for the strand shading model, DEPTH_ONLY for the depth pre-pass
-// of cut-out parts (coverage only; they are then shaded once where the pre-pass left them).
+// of cut-out parts (coverage only; they are then shaded once where the pre-pass left them),
+// SHADOWS for the key light's shadow map.
 in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
+in vec3 v_occ;  // ambient occlusion, visibility through the mouth opening, inside the mouth
+#ifdef SHADOWS
+in vec4 v_shadow;
+#include "shadow.glsl"
+#endif
+#ifdef WRINKLES
+#include "wrinkles.glsl"
+#endif
 
 uniform vec3 u_base;        // linear base colour
 uniform sampler2D u_tex;
@@ -20,6 +32,9 @@ uniform vec3 u_scatter;     // tint of light wrapped past the terminator (skin: 
 uniform float u_alpha;      // < 1: glass-like, premultiplied (specular stays)
 uniform float u_backface;   // brightness of back faces (cavities seen from outside)
 uniform mat4 u_view;        // (shared with the vertex shader) world up for hair strands
+uniform float u_ao;         // strength of the ambient occlusion (0 … 1)
+uniform vec3 u_mucosa;      // linear colour of skin inside the mouth
+uniform float u_tint;       // 1 for skin-like materials (take u_mucosa inside the mouth)
 
 #include "lights.glsl"
 uniform float u_exposure;
@@ -112,6 +127,7 @@ void main() {
 #endif
     }
 #endif
+    base = mix(base, u_mucosa, v_occ.z * u_tint);
 #ifdef DEPTH_ONLY
     // the depth pre-pass of cut-out parts, the only program that discards (a shader that
     // may discard loses early depth testing on llvmpipe): coverage only, colour masked off
@@ -124,6 +140,11 @@ void main() {
         n = -n;
         facing = u_backface;
     }
+#ifdef WRINKLES
+    float cavity;
+    n = wrinkled_normal(n, v_pos, cavity);
+    base *= cavity;
+#endif
 #ifdef HAIR
     vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);
     vec3 t = up - dot(up, n) * n;
@@ -141,12 +162,17 @@ void main() {
     vec3 sk = vec3(specular(n, v, u_key_dir));
     vec3 sf = vec3(specular(n, v, u_fill_dir));
 #endif
+    float ao = mix(1.0, v_occ.x, u_ao * (1.0 - v_occ.z));  // inside: the opening rules
+    float kv = 1.0;
+#ifdef SHADOWS
+    kv = key_visibility(v_shadow);
+#endif
     // key and fill: diffuse + specular; rim: diffuse only (it lights silhouettes)
-    vec3 c = u_key_col * (diffuse(n, u_key_dir) * u_alpha + gloss * sk)
-           + u_fill_col * (diffuse(n, u_fill_dir) * u_alpha + gloss * sf)
-           + u_rim_col * diffuse(n, u_rim_dir) * u_alpha;
-    vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha;
-    c = (c + ambient) * facing;
+    vec3 c = u_key_col * kv * (diffuse(n, u_key_dir) * u_alpha + gloss * sk)
+           + u_fill_col * sqrt(ao) * (diffuse(n, u_fill_dir) * u_alpha + gloss * sf)
+           + u_rim_col * ao * diffuse(n, u_rim_dir) * u_alpha;
+    vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha * ao;
+    c = (c + ambient) * facing * v_occ.y;
     if (u_alpha_mode == 3) {  // premultiplied soft edge; the core (a >= 0.5) adds nothing
         a = (a < 0.5 && a >= 0.02) ? a : 0.0;
         f_color = vec4(to_srgb(tonemap(c)) * a, a);

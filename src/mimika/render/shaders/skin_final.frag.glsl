@@ -7,6 +7,14 @@ in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
 in vec2 v_tex;
+in vec3 v_occ;  // ambient occlusion, visibility through the mouth opening, inside the mouth
+#ifdef SHADOWS
+in vec4 v_shadow;
+#include "shadow.glsl"
+#endif
+#ifdef WRINKLES
+#include "wrinkles.glsl"
+#endif
 
 uniform sampler2D u_irr;
 uniform vec3 u_base;
@@ -17,6 +25,8 @@ uniform float u_roughness;
 uniform vec3 u_mix;        // share of blurred irradiance per channel
 uniform float u_backface;
 uniform float u_exposure;
+uniform float u_ao;
+uniform vec3 u_mucosa;
 #include "skin_light.glsl"
 
 out vec4 f_color;
@@ -55,19 +65,30 @@ void main() {
         facing = u_backface;
     }
     vec3 v = normalize(-v_pos);
-    vec3 direct = skin_diffuse(n);
+    float cavity = 1.0;
+#ifdef WRINKLES
+    n = wrinkled_normal(n, v_pos, cavity);
+#endif
+    float kv = 1.0;
+#ifdef SHADOWS
+    kv = key_visibility(v_shadow);
+#endif
+    float ao = mix(1.0, v_occ.x, u_ao * (1.0 - v_occ.z));  // inside: the opening rules
+    vec3 direct = skin_diffuse(n, kv, ao) * v_occ.y;
     vec4 t = texture(u_irr, v_uv);
     vec3 blurred = t.a > 1e-3 ? t.rgb / t.a : direct;
     float cover = smoothstep(0.05, 0.6, t.a);
     vec3 irr = mix(direct, blurred, u_mix * cover);
-    vec3 spec = specular(n, v, u_key_dir, u_key_col) + specular(n, v, u_fill_dir, u_fill_col)
-              + specular(n, v, u_rim_dir, u_rim_col);
+    vec3 spec = (kv * specular(n, v, u_key_dir, u_key_col)
+                 + sqrt(ao) * specular(n, v, u_fill_dir, u_fill_col)
+                 + ao * specular(n, v, u_rim_dir, u_rim_col)) * v_occ.y;
     vec3 base = u_base;
     if (u_textured) {
         vec4 a = texture(u_albedo, v_tex);
         base = a.rgb * (a.rgb * (a.rgb * 0.305306011 + 0.682171111) + 0.012522878);  // sRGB
         spec *= a.a;
     }
-    vec3 c = (base * irr + spec) * facing;
+    base = mix(base, u_mucosa, v_occ.z);
+    vec3 c = (base * irr * cavity + spec) * facing;
     f_color = vec4(to_srgb(tonemap(c)), 1.0);
 }

@@ -56,7 +56,8 @@ async def export_png(req: StillRequest, request: Request) -> Response:
         aus = {k: v for k, v in aus.items() if k in set(rig.supported)}
         size = (req.width, req.height)
         with look.renderer(rig, req.look, size) as r:
-            return r.render(rig.deform(aus), camera=look.camera(rig, req.look, req.view, size))
+            return r.render(rig.deform(aus), camera=look.camera(rig, req.look, req.view, size),
+                            aus=aus)
 
     return await _picture(request, work, "pose.png", 1)
 
@@ -81,7 +82,7 @@ async def export_sheet(req: SheetRequest, request: Request) -> Response:
             cam = look.camera(rig, req.look, req.view, size)
             for e in exprs:
                 aus = {k: float(v) for k, v in e.aus.items() if k in sup}
-                images.append(r.render(rig.deform(aus), camera=cam))
+                images.append(r.render(rig.deform(aus), camera=cam, aus=aus))
         title = f"mimika: the expression library on the {st.head(req.head)} head"
         return contact_sheet(images, [e.name for e in exprs], columns=req.columns, title=title)
 

@@ -1,5 +1,9 @@
 // mimika's look in three.js: the renderer's lights, materials and backdrops (/api/look), so the
-// live view matches mimika's pictures ("plain") and the newsreader's video ("news").
+// live view matches mimika's pictures ("plain") and the newsreader's video ("news"). The skin
+// of a head whose GLB carries face units (the _FACE attribute, extras.wrinkles) takes the
+// renderer's AU wrinkles (render/shaders/wrinkles.glsl) as the frame's AUs change; the
+// inside of the mouth is darkened by the GLB's vertex colours (COLOR_0). Shadows and ambient
+// occlusion are the offline renderer's only.
 //
 // Every material the GLB carries stays a MeshStandardMaterial — so base-colour, normal and
 // alpha textures, alpha modes, skinning and morph targets keep working — but its lighting is
@@ -48,7 +52,7 @@ vec3 mk_shade(vec3 base, vec3 n, vec3 v, float alpha) {
   float facing = gl_FrontFacing ? 1.0 : u_backface;
   vec3 c;
   if (mk_skin > 0.5) {
-    c = base * skin_diffuse(n) + mk_beckmann(n, v, u_key_dir, u_key_col)
+    c = base * skin_diffuse(n, 1.0, 1.0) + mk_beckmann(n, v, u_key_dir, u_key_col)
       + mk_beckmann(n, v, u_fill_dir, u_fill_col) + mk_beckmann(n, v, u_rim_dir, u_rim_col);
   } else {
     float a = mk_glass > 0.5 ? alpha : 1.0;
@@ -100,6 +104,7 @@ export class Look {
     this.deskUniforms = { u_top: { value: 0 } };
     this.desk = quad(program(sh["desk.frag"], this.deskUniforms, { transparent: true }));
     this.camera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+    this.useWrinkles(null);
     this.set("plain");
   }
 
@@ -141,9 +146,49 @@ export class Look {
     return { ...p, skin: skinLike, known: !!(mats[material.name] || mats[name]) };
   }
 
+  // The wrinkles of a head (a GLB's extras.wrinkles, render/wrinkles.py): its landmark
+  // uniforms and per-frame depths, shared by every wrinkled material; null for none.
+  useWrinkles(desc) {
+    this.wrinkles = desc || null;
+    this.wrUniforms = { u_wr: { value: new Float32Array(28) } };
+    if (!desc) return;
+    for (const [k, v] of Object.entries(desc.uniforms)) {
+      this.wrUniforms[k] = { value: Array.isArray(v) ? new THREE.Vector2(...v) : v };
+    }
+    this.setWrinkles({});
+  }
+
+  // Each wrinkle group's depth per side for AU values {code: value} (as Wrinkles.weights).
+  setWrinkles(frame) {
+    const d = this.wrinkles;
+    if (!d) return;
+    const amount = new Float64Array(2 * d.groups.length);
+    const sides = {};
+    for (const [code, v] of Object.entries(frame)) {
+      const base = code.slice(0, 4), side = code.slice(4);
+      if (!d.aus[base] || !v) continue;
+      const lr = sides[base] || (sides[base] = [0, 0]);
+      if (side === "" || side === "L") lr[0] += v;
+      if (side === "" || side === "R") lr[1] += v;
+    }
+    for (const [base, lr] of Object.entries(sides)) {
+      for (const [g, k] of Object.entries(d.aus[base])) {
+        const i = d.groups.indexOf(g);
+        amount[2 * i] += k * Math.min(lr[0], 1);
+        amount[2 * i + 1] += k * Math.min(lr[1], 1);
+      }
+    }
+    const w = this.wrUniforms.u_wr.value;
+    for (let j = 0; j < amount.length; j++) {
+      w[j] = Math.max(Math.min(amount[j], 1) * d.depth[j >> 1], d.rest[j]);
+    }
+  }
+
   // Give ``material`` (from GLTFLoader) mimika's lighting; keeps its maps, alpha and morphs.
-  adopt(material) {
+  // ``wrinkled``: the material's mesh carries face units (the skin).
+  adopt(material, wrinkled = false) {
     const p = this.params(material);
+    const wr = wrinkled && p.skin && !!this.wrinkles;
     const textured = !!(material.map || material.alphaMap);
     const glass = material.transparent && !textured;
     if (p.known) material.side = p.cull ? THREE.FrontSide : THREE.DoubleSide;
@@ -165,7 +210,15 @@ export class Look {
     material.userData.mk = mk;
     if (p.skin) { this.skinMaterials.push(material); mk.mk_skin.value = this.info.looks[this.name].skin_shader ? 1 : 0; }
     material.onBeforeCompile = (shader) => {
-      Object.assign(shader.uniforms, this.lights, mk);
+      Object.assign(shader.uniforms, this.lights, mk, wr ? this.wrUniforms : {});
+      if (wr) {
+        shader.vertexShader = shader.vertexShader.replace("void main() {",
+          "in vec3 _face;\nout vec3 v_face;\nvoid main() {\n  v_face = _face;");
+        shader.fragmentShader = shader.fragmentShader
+          .replace("void main() {", `${this.info.shaders.wrinkles}\nvoid main() {`)
+          .replace("#include <normal_fragment_maps>", "#include <normal_fragment_maps>\n"
+            + "  { float mk_cav; normal = wrinkled_normal(normal, -vViewPosition, mk_cav); diffuseColor.rgb *= mk_cav; }");
+      }
       shader.fragmentShader = shader.fragmentShader
         .replace("void main() {", `${this.pars}\nvoid main() {`)
         .replace("#include <lights_fragment_begin>", "")
@@ -176,7 +229,7 @@ export class Look {
         .replace("#include <tonemapping_fragment>", "gl_FragColor.rgb = mk_tone(gl_FragColor.rgb);")
         .replace("#include <premultiplied_alpha_fragment>", "");
     };
-    material.customProgramCacheKey = () => "mimika-look-1";
+    material.customProgramCacheKey = () => (wr ? "mimika-look-1-wrinkles" : "mimika-look-1");
     material.needsUpdate = true;
     return material;
   }

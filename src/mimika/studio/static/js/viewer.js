@@ -71,6 +71,7 @@ export class Viewer {
     this.headJoint = this.eyeL = this.eyeR = null;
     // a character's GLB says how AU values move its skeleton (io/gltf_skinned.py)
     this.rig = (gltf.parser.json.extras || {}).rig || null;
+    this.look.useWrinkles((gltf.parser.json.extras || {}).wrinkles);
     this.joints = {};
     this.meshes = [];
     const seen = new Set();
@@ -78,7 +79,7 @@ export class Viewer {
       if (o.isMesh) {
         o.frustumCulled = false;
         for (const m of Array.isArray(o.material) ? o.material : [o.material]) {
-          if (!seen.has(m)) { seen.add(m); this.look.adopt(m); }
+          if (!seen.has(m)) { seen.add(m); this.look.adopt(m, !!o.geometry.attributes._face); }
         }
         if (o.morphTargetDictionary) this.meshes.push(o);
       }
@@ -172,6 +173,7 @@ export class Viewer {
   apply(frame) {
     this.frame = frame;
     this.dirty = true;
+    this.look.setWrinkles(frame);
     for (const m of this.meshes) {
       const inf = m.morphTargetInfluences, dict = m.morphTargetDictionary;
       inf.fill(0);

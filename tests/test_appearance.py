@@ -1,0 +1,177 @@
+"""What an observer sees of the AUs: the inside of an open mouth, the wrinkles AUs bring, the
+lights' shadows and occlusion, the calibration against ICT's real shapes, the glTF shading."""
+
+import numpy as np
+import pytest
+
+from conftest import needs_ict
+
+pytestmark = pytest.mark.render
+SIZE = (480, 480)
+
+
+def _render(rig, aus, *, light="studio", with_aus=True, view="front", hidden=()):
+    from mimika.render import Renderer
+
+    with Renderer(rig.head, size=SIZE, lighting=light, hidden=hidden) as r:
+        img = r.render(rig.deform(aus), view=view, aus=aus if with_aus else None)
+        return img.astype(float), r.camera(view)
+
+
+def _pixels(cam, points):
+    return np.round(cam.project(np.asarray(points, float), SIZE)).astype(int)
+
+
+def _luma(img, xy, r=2):
+    x, y = xy
+    return float(img[y - r:y + r + 1, x - r:x + r + 1].mean())
+
+
+def _polygon(cam, points) -> np.ndarray:
+    from PIL import Image, ImageDraw
+
+    mask = Image.new("L", SIZE, 0)
+    ImageDraw.Draw(mask).polygon([tuple(p) for p in _pixels(cam, points)], fill=1)
+    return np.asarray(mask, bool)
+
+
+def test_an_open_mouth_is_darker_inside_than_its_lips(any_rig):
+    aus = {"AU25": 1.0, "AU26": 1.0}
+    teeth = tuple(o.name for o in any_rig.head.objects if "teeth" in o.name)
+    img, cam = _render(any_rig, aus, hidden=teeth)  # the cavity, tongue and gums
+    lm = any_rig.head.landmark_points(any_rig.deform(aus))
+    opening = _polygon(cam, lm[60:68])
+    lips = _polygon(cam, lm[48:60]) & ~_polygon(cam, lm[[48, *range(60, 68), 54]])
+    y = img.mean(2)
+    assert opening.sum() > 200 and lips.sum() > 200
+    assert y[opening].mean() < 0.85 * y[lips].mean()
+    # shaded by depth: its darkest part (the throat, under the palate) is near black
+    assert np.percentile(y[opening], 10) < 0.35 * y[lips].mean()
+
+
+def test_the_mouth_interior_follows_the_opening(character_rig):
+    from mimika.render.mouth import MouthCavity
+
+    rig = character_rig
+    cav = MouthCavity(rig.head)
+    assert {"teeth", "tongue", "skin"} <= set(cav.ids)
+    vis = {k: cav.visibility(rig.deform(a))["teeth"].mean()
+           for k, a in {"closed": {}, "ajar": {"AU25": 0.5}, "open": {"AU26": 1.0,
+                                                                      "AU25": 1.0}}.items()}
+    assert vis["closed"] < 0.05 < vis["ajar"] < vis["open"]
+    # the front teeth catch more light than the molars at the back
+    teeth = rig.head["teeth"].vertices
+    ids = cav.ids["teeth"]
+    v = cav.visibility(rig.deform({"AU26": 1.0, "AU25": 1.0}))["teeth"]
+    z = teeth[ids, 2]
+    assert v[z > np.quantile(z, 0.8)].mean() > 2 * v[z < np.quantile(z, 0.2)].mean()
+
+
+def test_brow_raise_wrinkles_the_forehead_and_a_smile_does_not(character_rig):
+    rig = character_rig
+    lm = rig.head.landmark_points()
+    iod = float(np.linalg.norm(rig.head.anchors["eye_L"] - rig.head.anchors["eye_R"]))
+    forehead = lm[[19, 24]].mean(0) + np.array([0.0, 0.45 * iod, 0.1])
+    for aus, changes in (({"AU01": 1.0, "AU02": 1.0}, True), ({"AU12": 1.0}, False)):
+        with_w, cam = _render(rig, aus)
+        smooth, _ = _render(rig, aus, with_aus=False)
+        x, y = _pixels(cam, forehead[None])[0]
+        patch = np.abs(with_w - smooth)[y - 25:y + 25, x - 40:x + 40].mean()
+        if changes:
+            assert patch > 2.0, patch
+        else:
+            assert patch < 0.3, patch
+
+
+def test_wrinkle_depths_follow_intensity_side_and_age():
+    from mimika.face.heads import load_head
+    from mimika.render.wrinkles import Wrinkles
+
+    young, old = (Wrinkles(load_head(n)[0]) for n in ("tomas", "daniel"))  # 23 and 54
+    g = young.groups.index("forehead_medial")
+    half, full = (young.weights({"AU01": k})[2 * g] for k in (0.5, 1.0))
+    assert 0 < half < full
+    left = young.weights({"AU12L": 1.0})
+    n = young.groups.index("nasolabial")
+    assert left[2 * n] > 0.05 and left[2 * n + 1] < 0.2 * left[2 * n]
+    assert old.weights({"AU01": 1.0})[2 * g] > young.weights({"AU01": 1.0})[2 * g]
+    assert old.weights({})[2 * g] > young.weights({})[2 * g]  # lines at rest deepen with age
+    # AUs without appearance changes and body channels leave the skin as at rest
+    assert (young.weights({"AU61": 1.0, "body.breath": 1.0}) == young.weights({})).all()
+
+
+def test_the_key_light_casts_shadows_and_flat_light_does_not(character_rig):
+    rig = character_rig
+    lit, cam = _render(rig, {}, light="studio,shadows=hard,ao=0")
+    flat, _ = _render(rig, {}, light="studio,shadows=off,ao=0")
+    lm = rig.head.landmark_points()
+    # the key comes from the viewer's upper left: the nose shades the cheek on its other side
+    cheek = lm[35] + np.array([1.0, 0.0, -0.4])  # the subject's left, beside the nose wing
+    x, y = _pixels(cam, cheek[None])[0]
+    assert _luma(lit, (x, y), 3) < _luma(flat, (x, y), 3) - 5
+    far = lm[45] + np.array([1.6, 2.5, -0.4])  # the lit temple
+    x, y = _pixels(cam, far[None])[0]
+    assert abs(_luma(lit, (x, y), 3) - _luma(flat, (x, y), 3)) < 2
+
+
+def test_ambient_occlusion_darkens_creases_not_open_skin(builtin_rig):
+    from mimika.render import Renderer
+
+    with Renderer(builtin_rig.head, size=SIZE, lighting="studio,shadows=off") as r:
+        r.render()
+        ao = {o.name: o.interleaved[:, 6].copy() for o in r._objects}
+    skin = builtin_rig.head["skin"].vertices
+    lm = builtin_rig.head.landmark_points()
+    near = lambda p, r: np.linalg.norm(skin - p, axis=1) < r  # noqa: E731
+    crease = near(lm[39] + np.array([0.15, 0.1, -0.2]), 0.5)  # beside the inner eye corner
+    forehead = near(lm[[19, 24]].mean(0) + np.array([0.0, 3.0, 0.0]), 1.0)
+    assert crease.sum() and forehead.sum()
+    assert ao["skin"][crease].mean() < ao["skin"][forehead].mean() - 0.2
+
+
+@pytest.mark.parametrize("spec", ["sunny", "studio,key=9", "studio,shadows=maybe", "studio,x"])
+def test_light_errors_are_one_line_with_exit_2(spec, capsys):
+    from mimika.cli import main
+
+    assert main(["pose", "--light", spec, "-o", "x.png"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("mimika: error: --light") and "\n" not in err
+
+
+def test_light_spec_changes_the_named_lights():
+    from mimika.render.lighting import STUDIO, parse_light
+
+    lit = parse_light("studio,key=0.5,azimuth=0,elevation=0,shadows=off,ao=0.25")
+    assert lit.key_col == pytest.approx(tuple(0.5 * c for c in STUDIO.key_col))
+    assert lit.key_dir == pytest.approx((0.0, 0.0, 1.0), abs=1e-9)  # from the camera
+    assert (lit.shadows, lit.ao) == ("off", 0.25)
+    assert parse_light(None, "news").backdrop == "studio"
+
+
+@needs_ict
+@pytest.mark.slow
+def test_every_seed_au_is_calibrated_against_ict(ict_rig):
+    from mimika.face.calibration import SEED_AUS, TOLERANCE, au_motion, ratios
+    from mimika.face.heads import load_head
+
+    ref = au_motion(ict_rig, SEED_AUS)
+    lo, hi = TOLERANCE
+    for name in ("amara", "daniel", "mei", "tomas", "builtin"):
+        for code, r in ratios(au_motion(load_head(name)[1], SEED_AUS), ref).items():
+            for what, x in zip(("peak", "extent"), r, strict=True):
+                assert x is None or lo <= x <= hi, f"{name} {code} {what} {x:.2f} × ICT"
+
+
+def test_glb_carries_the_mouth_shading_and_face_units(tmp_path, character_rig):
+    from mimika.io.gltf import write_gltf
+    from mimika.render.appearance import export_appearance
+    from test_gltf import SKIP, _node
+
+    attrs, extras = export_appearance(character_rig.head)
+    teeth = attrs["teeth"]["COLOR_0"]
+    assert teeth.min() < 0.3 < 0.8 < teeth.max() <= 1.0  # front teeth bright, molars dark
+    assert attrs["skin"]["_FACE"][:, 2].max() == 1.0
+    p = write_gltf(tmp_path / "amara.glb", character_rig, attributes=attrs, extras=extras)
+    if SKIP is None:
+        rep = _node("validate.mjs", p)
+        assert rep["numErrors"] == 0, rep["messages"]
