@@ -57,13 +57,13 @@ float wrinkle_height(vec2 f) {
     // 4: crow's feet (AU6): lines fanning out from the outer eye corner
     vec2 c = f - vec2(sign(x) * (u_eye_out.x + 0.04), u_eye_out.y);
     float r = length(c);
-    if (ax > u_eye_out.x && r < 0.45) {
+    if (ax > u_eye_out.x && r < 0.32) {
         float th = atan(c.y, abs(c.x));
         float fan = 0.0;
         for (int k = 0; k < 4; k++) {
-            fan += furrow((th - (-0.55 + 0.32 * float(k))) * r, 0.013);
+            fan += furrow((th - (-0.6 + 0.28 * float(k))) * r, 0.013);
         }
-        h += gw(4, x) * fan * smoothstep(0.03, 0.09, r) * (1.0 - smoothstep(0.25, 0.42, r));
+        h += gw(4, x) * fan * smoothstep(0.03, 0.08, r) * (1.0 - smoothstep(0.18, 0.3, r));
     }
     // 5: infraorbital furrow under the lower lid (AU6, AU7)
     float ex = 0.5 * (u_eye_in.x + u_eye_out.x), ew = 0.5 * (u_eye_out.x - u_eye_in.x) + 0.1;
