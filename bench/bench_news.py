@@ -27,7 +27,8 @@ from mimika.face.heads import load_head
 from mimika.newsreader import example_bulletin, news_track, parse_article, speak_article
 from mimika.newsreader.pipeline import news_camera
 from mimika.render import Renderer
-from mimika.render.skin import NEWS_LIGHTING, SkinParams
+from mimika.render.lighting import NEWS as NEWS_LIGHTING
+from mimika.render.skin import SkinParams
 from mimika.render.video import VideoWriter
 
 

@@ -1,6 +1,7 @@
 """Render frames/s at 640×480 on the CPU (Mesa llvmpipe) — targets: built-in ≥ 60, ICT ≥ 30,
-the default character (whole person, textured, hair blended) ≥ 25; and the character's load
-time (first build, then from the cache).
+the default character (whole person, textured, hair blended) ≥ 25; what the lights cost
+(``studio`` with soft shadows and occlusion, the wrinkles of the frame's AUs, against ``flat``);
+and the character's load time (first build, then from the cache).
 
 Run: ``MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/bench_render.py``
 Times a full frame: AU → vertices, normals, upload, draw with 4× MSAA, read back to RGB.
@@ -20,14 +21,20 @@ from mimika.render import Renderer
 def bench(name: str, target: float) -> None:
     head, rig = load_head(name)
     t = np.linspace(0, 1, 50)
-    frames = [rig.deform({"AU12": float(x), "AU25": float(x) / 2, "AU51": float(x) / 3})
-              for x in 0.5 - 0.5 * np.cos(2 * np.pi * t)]
+    aus = [{"AU12": float(x), "AU25": float(x) / 2, "AU51": float(x) / 3}
+           for x in 0.5 - 0.5 * np.cos(2 * np.pi * t)]
+    frames = [rig.deform(a) for a in aus]
     print(f"{name}: {head.n_triangles} triangles")
-    for samples in (4, 0):
-        with Renderer(head, size=(640, 480), samples=samples) as r:
+    for samples, light in ((4, "studio"), (0, "studio"), (0, "flat")):
+        with Renderer(head, size=(640, 480), samples=samples, lighting=light) as r:
             it = iter(range(10**9))
-            fps = rate(lambda r=r, it=it: r.render(frames[next(it) % 50]), min_time=2.0)
-        report(f"  {name} render 640x480 samples={samples}", fps, "frames/s", target)
+
+            def frame(r=r, it=it) -> None:
+                i = next(it) % 50
+                r.render(frames[i], aus=aus[i])
+
+            fps = rate(frame, min_time=2.0)
+        report(f"  {name} render 640x480 samples={samples} {light}", fps, "frames/s", target)
 
 
 def bench_character_load() -> None:

@@ -25,7 +25,7 @@ from mimika.face.makehuman.character_file import assets, load_character_spec, pr
 from mimika.face.makehuman.paint import parts_of
 from mimika.render import Renderer
 from mimika.render.camera import frame_head
-from mimika.render.skin import NEWS_LIGHTING
+from mimika.render.lighting import NEWS as NEWS_LIGHTING
 
 VIEWS = ("front", "three-quarter", "profile")
 POSES = {"neutral": {}, "AU12+AU06": {"AU12": 1.0, "AU06": 1.0}, "AU27": {"AU27": 1.0},

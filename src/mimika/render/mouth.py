@@ -24,7 +24,7 @@ from mimika.face.head import Head
 
 #: the opening's share of a point's sky falls faster than a thin disc's would (r² / (r² + k·D²)):
 #: the lips, cheeks and teeth around the opening shade the cavity as well
-DEPTH_FALLOFF = 2.5
+DEPTH_FALLOFF = 1.5
 #: inner-lip landmarks: corners 60, 64; upper 61–63; lower 65–67
 _UPPER, _LOWER = [61, 62, 63], [67, 66, 65]
 
@@ -93,7 +93,7 @@ class MouthCavity:
             q = (np.asarray(positions.get(name, rest[name]))[ids] - centre) @ axes.T
             depth = np.maximum(-q[:, 2], 0.0)
             rho = np.sqrt((q[:, 0] / max(hw, 1e-3)) ** 2 + (q[:, 1] / max(hg, 1e-3)) ** 2)
-            side = np.maximum(rho - 1.0, 0.0) * np.sqrt(r2)
+            side = 0.5 * np.maximum(rho - 1.0, 0.0) * np.sqrt(r2)
             v = r2 / (r2 + DEPTH_FALLOFF * (depth**2 + side**2) + 1e-9)
             out[name] = (1.0 - self.inside[name] * (1.0 - v)).astype(np.float32)
         return out

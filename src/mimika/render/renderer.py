@@ -348,6 +348,8 @@ class Renderer:
         self.crop = bool(crop)
         self._skin: Any = None
         self._mouth: MouthCavity | None = None
+        self._frame = 0
+        self._refresh = max(1, int(getattr(skin_shader, "refresh", 1)))
         self._wrinkles: Wrinkles | None = None
         self._wr: bytes | None = None  # this frame's wrinkle depths (u_wr), None if smooth
         self._cameras: dict[str, Camera] = {}
@@ -400,8 +402,11 @@ class Renderer:
             inside = {} if self._mouth is None else self._mouth.visibility(pos)
             for o in self._objects:
                 o.update(pos.get(o.name), inside.get(o.name))
-            if "shadow_fbo" in gl:
+            # the shadow map is redrawn as often as the skin's blurred light (video: every
+            # third frame; the shadows of a speaking head move too little in between)
+            if "shadow_fbo" in gl and (self._frame % self._refresh == 0 or "shadow" not in gl):
                 self._shadow_pass(gl, ctx, cam)
+            self._frame += 1
             skin = self._skin
             if skin is not None:
                 skin.prepare(ctx, cam.view_matrix)
@@ -494,6 +499,7 @@ class Renderer:
         next frame computes everything afresh, as after a cut. Rendering a video in chunks
         calls this at each chunk so the images do not depend on how the chunks are shared
         out among processes."""
+        self._frame = 0
         if self._skin is not None:
             self._skin.invalidate()
 

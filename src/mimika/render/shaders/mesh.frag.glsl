@@ -173,7 +173,7 @@ void main() {
            + u_rim_col * ao * diffuse(n, u_rim_dir) * u_alpha;
     vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha * ao;
     // inside the mouth what light there is has bounced off its red walls
-    c = (c + ambient) * facing * v_occ.y * mix(vec3(1.0), vec3(1.0, 0.78, 0.7), 1.0 - v_occ.y);
+    c = (c + ambient) * facing * v_occ.y * mix(vec3(1.0), vec3(1.0, 0.86, 0.8), 1.0 - v_occ.y);
     if (u_alpha_mode == 3) {  // premultiplied soft edge; the core (a >= 0.5) adds nothing
         a = (a < 0.5 && a >= 0.02) ? a : 0.0;
         f_color = vec4(to_srgb(tonemap(c)) * a, a);
