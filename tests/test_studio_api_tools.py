@@ -86,8 +86,8 @@ def test_ict_head_by_name(client):
 
 # -- look and rules ------------------------------------------------------------------------------
 def test_look_comes_from_the_renderer(client):
-    from mimika.render.renderer import load_materials
     from mimika.render.lighting import NEWS as NEWS_LIGHTING
+    from mimika.render.renderer import load_materials
 
     d = client.get("/api/look").json()
     assert set(d["looks"]) == {"plain", "news"}
