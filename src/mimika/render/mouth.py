@@ -59,8 +59,8 @@ class MouthCavity:
                 w = np.ones(len(v))
             else:
                 zc = np.interp(v[:, 0], contour[order, 0], contour[order, 2])
-                depth = zc - v[:, 2]  # behind the inner-lip contour, cm
-                w = (_smoothstep(0.05, 0.45, depth)
+                depth = zc - v[:, 2]  # behind the inner-lip contour, cm (the throat ≈ 6)
+                w = (_smoothstep(0.05, 0.45, depth) * (1.0 - _smoothstep(6.0, 7.5, depth))
                      * (1.0 - _smoothstep(0.8 * half, 1.05 * half, np.abs(v[:, 0] - centre[0])))
                      * (1.0 - _smoothstep(0.45 * half, 0.75 * half,
                                           np.abs(v[:, 1] - centre[1]))))
