@@ -62,6 +62,8 @@ class Limits:
     max_exports: int = 2
     #: studio speech cache (megabytes of audio)
     max_cache_mb: float = 128.0
+    #: largest texture decoded from a glTF/VRM avatar (pixels, width × height)
+    max_texture_pixels: int = 64 * 1024 * 1024
 
 
 DEFAULTS = Limits()
@@ -73,7 +75,7 @@ _UNITS = {"max_duration": "s", "max_export_seconds": "s", "max_fps": "fps",
           "max_text": "characters", "max_body": "bytes", "max_cache_mb": "MB",
           "max_frames": "frames", "max_depth": "levels", "max_nodes": "values",
           "max_aliases": "aliases", "max_items": "items", "max_workers": "workers",
-          "max_exports": "exports"}
+          "max_exports": "exports", "max_texture_pixels": "pixels"}
 _override: Limits | None = None
 
 

@@ -115,6 +115,8 @@ def mesh_category(m: SceneMesh, scene: GltfScene, eye_bones: set[int]) -> str:
 
 def _centroid(v: np.ndarray, d: np.ndarray) -> np.ndarray:
     mag = np.linalg.norm(d, axis=1)
+    if not len(mag) or mag.max() <= 0:  # a morph that moves nothing
+        return v.mean(0) if len(v) else np.zeros(3)
     sel = mag >= 0.3 * mag.max()
     return (v[sel] * mag[sel, None]).sum(0) / mag[sel].sum()
 
@@ -171,6 +173,10 @@ def _shapes(scene: GltfScene, objects: list[tuple[SceneMesh, str]], frame: Frame
         for k, raw in enumerate(m.morph_names):
             mt = classify(raw)
             d = frame.apply_vector(m.morph_deltas[k])
+            if mt is not None and not np.any(np.abs(d) > 1e-7):  # moves nothing: no coverage
+                rows.append({"mesh": oname, "morph": raw, "kind": "empty", "as": mt.name,
+                             "how": "all-zero morph; the fallback field takes over"})
+                continue
             row = {"mesh": oname, "morph": raw, "kind": mt.kind if mt else "unused",
                    "as": mt.name if mt else "", "how": mt.how if mt else ""}
             rows.append(row)
@@ -235,7 +241,8 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     face_ids = [i for i, c in enumerate(cats) if c == "face"]
     if not face_ids:
         raise DataError(f"{p}: every mesh looks like eyes or teeth; no face mesh to animate")
-    matches = {i: {k: mt for k, n in enumerate(m.morph_names) if (mt := classify(n))}
+    matches = {i: {k: mt for k, n in enumerate(m.morph_names) if (mt := classify(n))
+                   and m.morph_deltas is not None and np.any(m.morph_deltas[k] != 0)}
                for i, m in enumerate(scene.meshes)}
     face_i = max(face_ids, key=lambda i: (len(matches[i]), len(scene.meshes[i].vertices)))
     face = scene.meshes[face_i]
@@ -292,5 +299,5 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     rig, cover = build_rig(head, shapes, origin, head_weight=weight)
     head.meta["coverage"] = cover
     log.info("%s: %s; %d of its morphs used", p, frame.describe(),
-             sum(r["kind"] not in ("unused", "duplicate") for r in rows))
+             sum(r["kind"] not in ("unused", "duplicate", "empty") for r in rows))
     return head, rig

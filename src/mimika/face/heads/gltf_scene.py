@@ -1,4 +1,5 @@
-"""Read a glTF 2.0 / GLB / VRM file into plain arrays (pygltflib does the parsing).
+"""Read a glTF 2.0 / GLB / VRM file into plain arrays (:mod:`mimika.io.gltf_source` reads
+the file and its buffers; pygltflib gives the object model).
 
 Every mesh node of the default scene becomes a :class:`SceneMesh` in the file's units and
 axes, at its rest pose: node transforms applied, skinned meshes placed by their joints
@@ -11,13 +12,18 @@ base colour, base-colour / normal textures (decoded to uint8 arrays) and alpha m
 from __future__ import annotations
 
 import io
+import json
 import logging
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from mimika.errors import DataError
+from mimika.io.gltf_ext.webp import texture_source
+from mimika.io.gltf_source import load_source
+from mimika.limits import current
 
 log = logging.getLogger(__name__)
 
@@ -26,6 +32,8 @@ __all__ = ["GltfScene", "SceneMaterial", "SceneMesh", "read_gltf"]
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
            5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+#: most elements in one accessor
+_MAX_COUNT = 50_000_000
 _NORM = {np.int8: 127.0, np.uint8: 255.0, np.int16: 32767.0, np.uint16: 65535.0}
 
 
@@ -107,21 +115,18 @@ def _trs(node) -> np.ndarray:
 
 
 class _Reader:
+    """pygltflib's object model over :class:`~mimika.io.gltf_source.GltfSource`'s JSON; the
+    bytes come from the source (each bufferView from its own buffer, meshopt decoded)."""
+
     def __init__(self, path: Path) -> None:
-        from pygltflib import GLTF2, BufferFormat
+        from pygltflib import GLTF2
 
         self.path = path
+        self.src = load_source(path)
         try:
-            with open(path, "rb") as fh:  # .vrm (and misnamed files): decide by the magic
-                binary = fh.read(4) == b"glTF"
-            g = GLTF2().load_binary(str(path)) if binary else GLTF2().load_json(str(path))
-            if g is None:
-                raise ValueError("not a glTF file")
-            if g.buffers:
-                g.convert_buffers(BufferFormat.BINARYBLOB)
-            self.blob = g.binary_blob() or b""
-        except DataError:
-            raise
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                g = GLTF2.from_json(json.dumps(self.src.doc), infer_missing=True)
         except Exception as e:  # pygltflib raises many kinds on broken input
             raise DataError(f"{path}: not a readable glTF/GLB file ({type(e).__name__}: "
                             f"{str(e)[:120]}); export it again from your tool") from None
@@ -134,26 +139,31 @@ class _Reader:
             acc = g.accessors[idx]
             dt = np.dtype(_DTYPES[acc.componentType])
             width = _WIDTH[acc.type]
+            if not isinstance(acc.count, int) or acc.count < 0 or acc.count > _MAX_COUNT:
+                raise ValueError(f"count {acc.count!r}")
             out = np.zeros((acc.count, width), dt)
             if acc.bufferView is not None:
+                blob = self.src.view(acc.bufferView)
                 bv = g.bufferViews[acc.bufferView]
-                off = (bv.byteOffset or 0) + (acc.byteOffset or 0)
+                off = acc.byteOffset or 0
                 stride = bv.byteStride or width * dt.itemsize
                 need = off + stride * (acc.count - 1) + width * dt.itemsize
-                if acc.count and need > len(self.blob):
-                    raise ValueError("runs past the end of its buffer")
+                if acc.count and need > len(blob):
+                    raise ValueError("runs past the end of its bufferView")
                 if acc.count:
-                    out[:] = np.ndarray((acc.count, width), dt, self.blob, off,
+                    out[:] = np.ndarray((acc.count, width), dt, blob, off,
                                         (stride, dt.itemsize))
             sp = acc.sparse
             if sp is not None and sp.count:
-                ib = g.bufferViews[sp.indices.bufferView]
+                if not 0 < sp.count <= acc.count:
+                    raise ValueError(f"sparse count {sp.count!r}")
+                iblob = self.src.view(sp.indices.bufferView)
                 idt = np.dtype(_DTYPES[sp.indices.componentType])
-                ids = np.frombuffer(self.blob, idt, sp.count,
-                                    (ib.byteOffset or 0) + (sp.indices.byteOffset or 0))
-                vb = g.bufferViews[sp.values.bufferView]
-                vals = np.frombuffer(self.blob, dt, sp.count * width,
-                                     (vb.byteOffset or 0) + (sp.values.byteOffset or 0))
+                ids = np.frombuffer(iblob, idt, sp.count, sp.indices.byteOffset or 0)
+                if ids.max() >= acc.count:
+                    raise ValueError("sparse index past its count")
+                vblob = self.src.view(sp.values.bufferView)
+                vals = np.frombuffer(vblob, dt, sp.count * width, sp.values.byteOffset or 0)
                 out[ids.astype(np.int64)] = vals.reshape(-1, width)
         except (IndexError, KeyError, TypeError, ValueError, AttributeError) as e:
             raise DataError(f"{self.path}: accessor {idx} is broken ({e}); export the file "
@@ -166,31 +176,30 @@ class _Reader:
         """The decoded image of texture ``tex_index`` ((H, W, C) uint8) or None."""
         from PIL import Image
 
-        g = self.g
-        if tex_index is None or tex_index >= len(g.textures):
+        textures = self.src.items("textures")
+        if not isinstance(tex_index, int) or not 0 <= tex_index < len(textures):
             return None
-        src = g.textures[tex_index].source
+        src = texture_source(textures[tex_index])
         if src is None:
             return None
-        im = g.images[src]
         try:
-            if im.bufferView is not None:
-                bv = g.bufferViews[im.bufferView]
-                off = bv.byteOffset or 0
-                data = self.blob[off:off + bv.byteLength]
-            elif im.uri and im.uri.startswith("data:"):
-                import base64
-
-                data = base64.b64decode(im.uri.split(",", 1)[1])
-            elif im.uri:
-                data = (self.path.parent / im.uri).read_bytes()
-            else:
-                return None
-            pic = Image.open(io.BytesIO(data))
-            pic = pic.convert("RGBA" if "A" in pic.getbands() else "RGB")
+            data = self.src.image_bytes(src)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                pic = Image.open(io.BytesIO(data))
+                w, h = pic.size
+                cap = current().max_texture_pixels
+                if w * h > cap:
+                    log.warning("%s: image %s is %d×%d, over %d pixels (max_texture_pixels); "
+                                "using the material colour", self.path, src, w, h, cap)
+                    return None
+                pic = pic.convert("RGBA" if "A" in pic.getbands() else "RGB")
             return np.asarray(pic, np.uint8)
-        except Exception as e:  # a missing or undecodable image: keep the material colour
-            log.warning("%s: image %d not decoded (%s); using the material colour",
+        except DataError as e:  # outside the folder, missing: say so, keep the colour
+            log.warning("%s; using the material colour", e)
+            return None
+        except Exception as e:  # an undecodable image: keep the material colour
+            log.warning("%s: image %s not decoded (%s); using the material colour",
                         self.path, src, e)
             return None
 
