@@ -32,8 +32,12 @@ __all__ = ["GltfScene", "SceneMaterial", "SceneMesh", "read_gltf"]
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
            5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
-#: most elements in one accessor
+#: most numbers in one accessor (count × components)
 _MAX_COUNT = 50_000_000
+#: deepest node hierarchy, most mesh instances, most morph targets per mesh
+_MAX_DEPTH, _MAX_MESHES, _MAX_MORPHS = 256, 512, 2048
+#: largest position coordinate (file units; a head in millimetres is ~300)
+_MAX_COORD = 1e6
 _NORM = {np.int8: 127.0, np.uint8: 255.0, np.int16: 32767.0, np.uint16: 65535.0}
 
 
@@ -139,7 +143,8 @@ class _Reader:
             acc = g.accessors[idx]
             dt = np.dtype(_DTYPES[acc.componentType])
             width = _WIDTH[acc.type]
-            if not isinstance(acc.count, int) or acc.count < 0 or acc.count > _MAX_COUNT:
+            if (not isinstance(acc.count, int) or acc.count < 0
+                    or acc.count * width > _MAX_COUNT):
                 raise ValueError(f"count {acc.count!r}")
             out = np.zeros((acc.count, width), dt)
             if acc.bufferView is not None:
@@ -219,39 +224,57 @@ def _materials(r: _Reader) -> list[SceneMaterial]:
 
 
 def _world(g) -> tuple[np.ndarray, np.ndarray, list[int]]:
-    """Rest world matrices and parents of all nodes; the nodes of the default scene."""
+    """Rest world matrices and parents of all nodes; the nodes of the default scene. Child
+    indices, one parent per node, no cycles and depth ≤ :data:`_MAX_DEPTH` are checked."""
     n = len(g.nodes)
     parent = np.full(n, -1, np.int64)
     for i, nd in enumerate(g.nodes):
         for c in nd.children or []:
+            if not isinstance(c, int) or not 0 <= c < n or c == i:
+                raise DataError(f"node {i} has child {c!r}, which does not exist")
+            if parent[c] >= 0:
+                raise DataError(f"node {c} has two parents ({parent[c]} and {i})")
             parent[c] = i
     local = np.stack([_trs(nd) for nd in g.nodes]) if n else np.zeros((0, 4, 4))
+    if not np.isfinite(local).all():
+        raise DataError("a node transform is not finite")
     world = np.zeros_like(local)
-    done = np.zeros(n, bool)
-
-    def solve(i: int, depth: int = 0) -> np.ndarray:
-        if depth > n:
-            raise DataError("the glTF node hierarchy has a cycle")
-        if not done[i]:
-            p = parent[i]
-            world[i] = local[i] if p < 0 else solve(p, depth + 1) @ local[i]
-            done[i] = True
-        return world[i]
-
-    for i in range(n):
-        solve(i)
+    depth = np.full(n, -1, np.int64)
+    for i in range(n):  # iteratively: walk up to a solved node, then down
+        chain = []
+        j = i
+        while j >= 0 and depth[j] < 0:
+            chain.append(j)
+            if len(chain) > min(n, _MAX_DEPTH):
+                raise DataError(f"the node hierarchy has a cycle or is deeper than "
+                                f"{_MAX_DEPTH} levels")
+            j = parent[j]
+        for k in reversed(chain):
+            p = parent[k]
+            world[k] = local[k] if p < 0 else world[p] @ local[k]
+            depth[k] = 0 if p < 0 else depth[p] + 1
+            if depth[k] > _MAX_DEPTH:
+                raise DataError(f"the node hierarchy is deeper than {_MAX_DEPTH} levels")
     scenes = g.scenes or []
     if scenes:
-        roots = scenes[g.scene or 0].nodes or []
-        in_scene: list[int] = []
+        si = g.scene or 0
+        if not isinstance(si, int) or not 0 <= si < len(scenes):
+            raise DataError(f"the default scene {si!r} does not exist")
+        roots = scenes[si].nodes or []
+        if any(not isinstance(r, int) or not 0 <= r < n for r in roots):
+            raise DataError("a scene names a node that does not exist")
+        seen: set[int] = set()
         stack = list(roots)
-        while stack:
+        while stack:  # one parent per node: each is reached once
             i = stack.pop()
-            in_scene.append(i)
+            if i in seen:
+                continue
+            seen.add(i)
             stack += g.nodes[i].children or []
+        in_scene = sorted(seen)
     else:
         in_scene = list(range(n))
-    return world, parent, sorted(in_scene)
+    return world, parent, in_scene
 
 
 def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
@@ -273,6 +296,12 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
         else:
             off = seen[a.POSITION] = base
             v = r.accessor(a.POSITION)[:, :3].astype(np.float64)
+            if not np.isfinite(v).all() or np.abs(v).max(initial=0) > _MAX_COORD:
+                raise DataError(f"{r.path}: mesh {mesh.name!r} has positions that are not "
+                                f"finite numbers within ±{_MAX_COORD:g}")
+            if len(prim.targets or []) > _MAX_MORPHS:
+                raise DataError(f"{r.path}: mesh {mesh.name!r} has {len(prim.targets)} morph "
+                                f"targets, over {_MAX_MORPHS}")
             verts.append(v)
             uvs.append(r.accessor(a.TEXCOORD_0)[:, :2] if a.TEXCOORD_0 is not None else None)
             joints.append(r.accessor(a.JOINTS_0) if a.JOINTS_0 is not None else None)
@@ -280,7 +309,11 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
             tl = []
             for t in prim.targets or []:
                 pi = t.get("POSITION") if isinstance(t, dict) else getattr(t, "POSITION", None)
-                tl.append(r.accessor(pi)[:, :3] if pi is not None else np.zeros_like(v))
+                d = r.accessor(pi)[:, :3] if pi is not None else np.zeros_like(v)
+                if d.shape != v.shape or not np.isfinite(d).all():
+                    raise DataError(f"{r.path}: mesh {mesh.name!r}: a morph target does not "
+                                    "match its vertices or is not finite")
+                tl.append(d)
             targets.append(tl)
             base += len(v)
         idx = (r.accessor(prim.indices).reshape(-1) if prim.indices is not None
@@ -312,11 +345,17 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
     jt = wt = None
     if node.skin is not None and all(j is not None for j in joints) and all(
             w is not None for w in weights):
+        if not isinstance(node.skin, int) or not 0 <= node.skin < len(g.skins or []):
+            raise DataError(f"{r.path}: node {ni} names skin {node.skin!r}, which does not "
+                            "exist")
         skin = g.skins[node.skin]
         jt_local = np.concatenate(joints).astype(np.int64)
         wt = np.concatenate(weights).astype(np.float64)
-        jnodes = np.asarray(skin.joints, np.int64)
-        if jt_local.max(initial=0) >= len(jnodes):
+        jnodes = np.asarray(skin.joints or [], np.int64)
+        if jnodes.size and (jnodes.min() < 0 or jnodes.max() >= len(g.nodes)):
+            raise DataError(f"{r.path}: skin {node.skin} names a joint node that does not "
+                            "exist")
+        if jt_local.max(initial=0) >= len(jnodes) or jt_local.min(initial=0) < 0:
             raise DataError(f"{r.path}: skin {node.skin} joint index out of range")
         jt = jnodes[jt_local]
         ibm = (r.accessor(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
@@ -383,15 +422,33 @@ def read_gltf(path: str | Path) -> GltfScene:
     p = Path(path)
     if not p.is_file():
         raise DataError(f"{p}: no such file")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return _read(p)
+    except DataError as e:
+        msg = str(e)
+        raise DataError(msg if msg.startswith(str(p)) else f"{p}: {msg}; export the file "
+                        "again from your tool") from None
+    except (IndexError, KeyError, TypeError, ValueError, AttributeError, OverflowError,
+            MemoryError, RecursionError, np.linalg.LinAlgError) as e:
+        # a structure the checks above did not foresee: still one line, never a traceback
+        raise DataError(f"{p}: a malformed glTF ({type(e).__name__}: {str(e)[:100]}); "
+                        "export the file again from your tool") from None
+
+
+def _read(p: Path) -> GltfScene:
     r = _Reader(p)
     g = r.g
     world, parent, in_scene = _world(g)
+    if sum(g.nodes[i].mesh is not None for i in in_scene) > _MAX_MESHES:
+        raise DataError(f"{p}: more than {_MAX_MESHES} mesh instances")
     meshes: list[SceneMesh] = []
     mesh_of_node: dict[int, list[int]] = {}
     for ni in in_scene:
         if g.nodes[ni].mesh is None:
             continue
-        if g.nodes[ni].mesh >= len(g.meshes):
+        if not isinstance(g.nodes[ni].mesh, int) or not 0 <= g.nodes[ni].mesh < len(g.meshes):
             raise DataError(f"{p}: node {ni} names mesh {g.nodes[ni].mesh}, which does not exist")
         sm = _mesh_node(r, ni, world)
         if sm is not None and any(len(f) for _, f in sm.primitives):
@@ -399,6 +456,11 @@ def read_gltf(path: str | Path) -> GltfScene:
             meshes.append(sm)
     if not meshes:
         raise DataError(f"{p}: the file holds no triangle mesh (nothing to animate)")
+    allv = np.concatenate([m.vertices for m in meshes])
+    if not np.isfinite(allv).all() or np.abs(allv).max() > _MAX_COORD or np.ptp(
+            allv, axis=0).max() <= 0:
+        raise DataError(f"{p}: the placed meshes are not finite, beyond ±{_MAX_COORD:g} or "
+                        "have no extent")
     scene = GltfScene(p, meshes, _materials(r), [nd.name or f"node{i}" for i, nd in
                                                  enumerate(g.nodes)], world, parent)
     _vrm(g, scene, mesh_of_node)

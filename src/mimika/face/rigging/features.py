@@ -99,6 +99,7 @@ def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
     tri = v[f]
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     h = float(np.sqrt(max(area.sum(), 1e-12) / 3e5))
+    h = max(h, float(np.ptp(v[:, :2], axis=0).max()) / 2048)  # a sliver: ≤ 2048² cells
     k = np.minimum(np.ceil(np.sqrt(2 * area) / h).astype(np.int64), 64)  # samples per edge
     pts = [v]
     for kk in np.unique(k[k > 1]):
