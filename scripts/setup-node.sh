@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Install the node tools the tests use (glTF-Validator, three.js) into tools/node_modules.
+# Install the node tools the tests use (glTF-Validator, three.js, glTF-Transform) into tools/node_modules.
 # Skips quietly when node/npm are absent (the glTF tests then skip with a reason).
 set -euo pipefail
 cd "$(dirname "$0")/.."
