@@ -2,7 +2,7 @@
 expressions (tables in ``face/data/morph_names.json``).
 
 Canonical names: ``AU12``, ``AU12_L``/``AU12_R`` for FACS; the ICT-FaceKit spelling of ARKit
-shapes (``eyeBlinkLeft`` → ``eyeBlink_L``, ``jawOpen``), which ``face/data/ict_aus.json``
+shapes (``eyeBlinkLeft`` → ``eyeBlink_L``, ``jawOpen``), which ``facs/data/ict_aus.json``
 composes into AUs; ``viseme_aa`` … for visemes.
 """
 

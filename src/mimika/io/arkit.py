@@ -1,7 +1,7 @@
 """FACS AUs ↔ ARKit-52 blendshapes (+ head and eye rotations), as Live Link Face names them.
 
 Import (:func:`arkit_to_aus`) follows ``io/data/arkit_aus.json`` (DATA.md's table); export
-(:func:`aus_to_arkit`) follows the rig's ``face/data/ict_aus.json`` (AU → shapes with weights),
+(:func:`aus_to_arkit`) follows the rig's ``facs/data/ict_aus.json`` (AU → shapes with weights),
 whose primary entries are the exact inverse. Sides: ARKit ``…Left`` is the subject's left (L).
 Equal left and right values import as the bilateral AU plus one-sided residuals.
 """
@@ -16,6 +16,7 @@ from importlib import resources
 import numpy as np
 
 from mimika.facs import parse_au
+from mimika.facs.shapes import au_shape_table
 
 __all__ = ["ARKIT_52", "LIVELINK_COLUMNS", "ROTATIONS", "apply_extras", "arkit_extras",
            "arkit_to_aus", "aus_to_arkit", "extra_names", "shape_groups", "table"]
@@ -72,9 +73,7 @@ def _targets(base: str, side: str | None) -> list[tuple[int, float]]:
 
 def aus_to_arkit(values: np.ndarray, channels: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
     """AU frames (T, K) → ARKit blendshapes (T, 52) in [0, 1] and rotations (T, 9) in radians."""
-    from mimika.face.rigs.blendshape import load_table
-
-    spec_of = {**table()["export_extra"], **load_table()["aus"]}
+    spec_of = {**table()["export_extra"], **au_shape_table()["aus"]}
     v = np.asarray(values, np.float64).reshape(len(values), len(channels))
     out = np.zeros((len(v), len(ARKIT_52)))
     rot = np.zeros((len(v), len(ROTATIONS)))

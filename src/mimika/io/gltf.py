@@ -42,17 +42,19 @@ import struct
 import weakref
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import mimika
 from mimika.errors import ParameterError
-from mimika.face.head import Head, Part
-from mimika.face.rig import Rig
 from mimika.facs import AU_CATALOGUE
 from mimika.io.atomic import atomic_write
 from mimika.tracks import AUTrack
+
+if TYPE_CHECKING:  # io/ does not import face/ at run time: a rig is duck-typed here
+    from mimika.face.head import Head, Part
+    from mimika.face.rig import Rig
 
 log = logging.getLogger(__name__)
 

@@ -3,7 +3,7 @@
 Every AU takes the first source that covers it:
 
 1. **FACS morphs** named for the AU (``AU12``, ``AU12_L``/``AU12_R``);
-2. **ARKit morphs**: all the shapes ``face/data/ict_aus.json`` composes the AU from;
+2. **ARKit morphs**: all the shapes ``facs/data/ict_aus.json`` composes the AU from;
 3. **visemes** (``morph_names.json``'s ``viseme_aus``: jaw opening, rounding, pressing);
 4. **seed-002 fields**: the AU's ARKit shapes generated on the mesh
    (:func:`~mimika.face.rigging.generate.generate_shapes`) where the avatar lacks them.

@@ -7,7 +7,7 @@
    (inside the mouth) follow the jaw, the lower ones as their own objects; the rest is face.
 4. Place the 68 landmarks and carry the shipped per-shape fields onto the mesh
    (:mod:`~mimika.face.rigging.generate`): the 53 ICT shapes, from which the ARKit-52 set (all
-   but ``tongueOut``) and the FACS AUs (``face/data/ict_aus.json``) are composed.
+   but ``tongueOut``) and the FACS AUs (``facs/data/ict_aus.json``) are composed.
 """
 
 from __future__ import annotations

@@ -19,6 +19,7 @@ from mimika.errors import DataError, ParameterError
 from mimika.face.head import Head
 from mimika.face.rig import Positions, Rig, split_sides
 from mimika.facs import AU_CATALOGUE, base_code, parse_au
+from mimika.facs.shapes import au_shape_table
 
 log = logging.getLogger(__name__)
 
@@ -38,7 +39,10 @@ class ShapeSet:
 
 
 def load_table(name: str = "ict_aus.json") -> dict:
-    """The AU → shape table shipped in ``mimika/face/data``."""
+    """The AU → shape table: ICT's (:func:`mimika.facs.shapes.au_shape_table`) or another
+    shipped in ``mimika/face/data`` (``makehuman_aus.json``)."""
+    if name == "ict_aus.json":
+        return au_shape_table()
     text = resources.files("mimika.face").joinpath("data", name).read_text("utf-8")
     return json.loads(text)
 
