@@ -93,6 +93,24 @@ def test_a_studio_bound_to_every_interface_serves_ip_literals_but_not_names():
     assert HostPolicy("127.0.0.1", ["*.lan"]).allows("studio.lan:8765")
 
 
+@pytest.mark.parametrize("host", [
+    "[::1].attacker.test:8765", "localhost:8765@attacker.test", "attacker.test@localhost",
+    "localhost:80:80", "localhost:http", "[::1]x", "[127.0.0.1]:8765", "local host", "",
+    "localhost/evil", "127.0.0.1.attacker.test"])
+def test_host_headers_are_parsed_as_authorities(host):
+    from mimika.studio.guard import HostPolicy
+
+    assert not HostPolicy("127.0.0.1", ["studio.lan"]).allows(host)
+    assert not HostPolicy("0.0.0.0").allows(host)
+
+
+def test_userinfo_and_suffixed_ipv6_hosts_are_refused_by_the_server(server, http):
+    for host in (f"[::1].{EVIL}:{server['port']}", f"localhost:{server['port']}@{EVIL}"):
+        r = http.put("/api/projects/stolen", json=project(),
+                     headers={"Host": host, "Origin": f"http://{host}"})
+        assert "not served here" in error_of(r, 403), host
+
+
 # -- oversize and malformed bodies ---------------------------------------------------------------
 def test_oversize_bodies_get_413(http):
     big = b'{"aus": {}, "disabled": ["' + b"x" * (3 * 1024 * 1024) + b'"]}'

@@ -14,6 +14,7 @@ from __future__ import annotations
 import ipaddress
 import json
 import os
+import re
 import socket
 from collections.abc import Iterable
 from typing import Any
@@ -23,14 +24,40 @@ WILDCARDS = ("0.0.0.0", "::", "")
 ENV = "MIMIKA_STUDIO_ALLOWED_HOSTS"
 
 
-def host_name(header: str) -> str:
-    """The name of a Host header, lower-case, without port, brackets or trailing dot."""
+#: a DNS name as a Host header may carry it (letters, digits, ``-`` and ``_``, dot-separated)
+_NAME = re.compile(r"[a-z0-9_-]+(?:\.[a-z0-9_-]+)*\.?")
+_PORT = re.compile(r":[0-9]{1,5}")
+
+
+def host_name(header: str) -> str | None:
+    """The name of a Host header (an RFC 3986 authority without userinfo), lower-case,
+    without port, brackets or trailing dot; None when it is not one — userinfo (``a@b``),
+    text after a bracketed IPv6 literal, a port that is not digits, characters no name has."""
     h = header.strip().lower()
     if h.startswith("["):  # [::1]:8765
-        return h[1:h.find("]")] if "]" in h else h[1:]
-    if h.count(":") == 1:
-        h = h.split(":", 1)[0]
-    return h.rstrip(".")
+        end = h.find("]")
+        name, rest = (h[1:end], h[end + 1:]) if end > 0 else ("", "")
+        if ":" not in name or not _is_ip(name):
+            return None
+    elif _is_ip(h):  # a bare IP address (an IPv6 bind address: ::1)
+        return h
+    else:
+        name, sep, port = h.partition(":")
+        rest = sep + port
+        if not _NAME.fullmatch(name):
+            return None
+    if rest and not _PORT.fullmatch(rest):
+        return None
+    return name.rstrip(".")
+
+
+def _pattern(entry: str) -> str | None:
+    """An allow-list entry: a name, or ``*.suffix`` for every name under it."""
+    e = entry.strip().lower()
+    if e.startswith("*."):
+        rest = host_name(e[2:])
+        return None if rest is None else "*." + rest
+    return host_name(e)
 
 
 def _is_ip(name: str) -> bool:
@@ -45,9 +72,9 @@ class HostPolicy:
     """Which Host names a studio bound to ``bind`` answers (see the module docstring)."""
 
     def __init__(self, bind: str = "127.0.0.1", allowed: Iterable[str] = ()):
-        self.bind = host_name(bind) if bind not in WILDCARDS else bind
+        self.bind = (host_name(bind) or bind) if bind not in WILDCARDS else bind
         extra = [*allowed, *os.environ.get(ENV, "").split(",")]
-        self.allowed = {host_name(a) for a in extra if a.strip()}
+        self.allowed = {p for p in map(_pattern, extra) if p}
         self.names = {"localhost", self.bind}
         if self.bind in ("127.0.0.1", "::1", "localhost"):
             self.names.update(LOOPBACK_NAMES)
@@ -60,6 +87,8 @@ class HostPolicy:
         if header is None:  # not a browser (every browser sends Host): no rebinding
             return True
         name = host_name(header)
+        if name is None:  # not an authority: nothing a served name could be
+            return False
         if name in self.names or name in self.allowed:
             return True
         if any(a.startswith("*.") and name.endswith(a[1:]) for a in self.allowed):
