@@ -114,6 +114,16 @@ def test_character_file_extends_a_preset(tmp_path):
     assert c.hair is None and c.clothes == base.clothes and c.name == "older"
 
 
+def test_a_file_name_with_spaces_and_accents_is_never_held_against_the_user(tmp_path):
+    from mimika.face.makehuman.character_file import load_character_spec
+
+    f = tmp_path / "my char é.yaml"
+    f.write_text("phenotype: {age: 40}\n")
+    assert load_character_spec(str(f)).name == "my_char_é"
+    (tmp_path / "   .yaml").write_text("skin: \"#8d5524\"\n")
+    assert load_character_spec(str(tmp_path / "   .yaml")).name == "character"
+
+
 # -- the rig on a character ---------------------------------------------------------------------
 
 

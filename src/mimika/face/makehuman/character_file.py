@@ -221,7 +221,8 @@ def character_from_dict(doc: dict, where: str, default_name: str = "character") 
     if not isinstance(clothes, list):
         raise DataError(f"{where}: clothes must be a list of names")
     mix = pheno.get("origin") or dict.fromkeys(RACES, 1.0)
-    name = doc.get("name", default_name)
+    # a name taken from the file name is made valid, never held against the user
+    name = doc.get("name", re.sub(r"[^\w.-]+", "_", default_name).strip("_")[:64] or "character")
     if not isinstance(name, str) or not re.fullmatch(r"[\w.-]{1,64}", name):
         raise DataError(f"{where}: name must be 1–64 letters, digits, '.', '_' or '-'")
     desc = doc.get("description", "")
