@@ -25,7 +25,8 @@ from typing import Any
 from mimika.errors import DataError, ParameterError
 
 __all__ = ["DEFAULTS", "OPTIONS", "LimitError", "Limits", "check_count", "check_duration",
-           "check_fps", "check_frames", "check_json_tree", "check_speech", "check_text",
+           "check_fps", "check_frames", "check_json_tree", "check_recording",
+           "check_speech", "check_text",
            "check_timeline", "current", "fmt", "loads_json", "over", "override",
            "speech_seconds"]
 
@@ -64,6 +65,12 @@ class Limits:
     max_cache_mb: float = 128.0
     #: largest texture decoded from a glTF/VRM avatar (pixels, width × height)
     max_texture_pixels: int = 64 * 1024 * 1024
+    #: longest recording read for alignment or a video's sound track (seconds)
+    max_recording: float = 1800.0
+    #: highest sample rate of a recording (Hz)
+    max_sample_rate: int = 96_000
+    #: most channels of a recording
+    max_channels: int = 16
 
 
 DEFAULTS = Limits()
@@ -75,7 +82,8 @@ _UNITS = {"max_duration": "s", "max_export_seconds": "s", "max_fps": "fps",
           "max_text": "characters", "max_body": "bytes", "max_cache_mb": "MB",
           "max_frames": "frames", "max_depth": "levels", "max_nodes": "values",
           "max_aliases": "aliases", "max_items": "items", "max_workers": "workers",
-          "max_exports": "exports", "max_texture_pixels": "pixels"}
+          "max_exports": "exports", "max_texture_pixels": "pixels",
+          "max_recording": "s", "max_sample_rate": "Hz", "max_channels": "channels"}
 _override: Limits | None = None
 
 
@@ -228,6 +236,28 @@ def check_speech(text: str, wpm: float, what: str = "the text") -> None:
     if est > current().max_duration:
         raise over("max_duration", f"{what} would take about {fmt(est / 60)} min to say at "
                                    f"{fmt(wpm)} words per minute")
+
+
+#: lowest sample rate that can hold speech (Hz): below it a recording is refused as broken
+MIN_SAMPLE_RATE = 4000
+
+
+def check_recording(seconds: float, sr: float, channels: int, what: str) -> None:
+    """Refuse a recording, from what its header declares, before it is decoded: longer than
+    ``max_recording``, a rate outside 4 kHz … ``max_sample_rate``, over ``max_channels``."""
+    from mimika.errors import DataError
+
+    lim = current()
+    if not sr >= MIN_SAMPLE_RATE:
+        raise DataError(f"{what}: a sample rate of {fmt(sr)} Hz cannot hold speech (at least "
+                        f"{fmt(MIN_SAMPLE_RATE)} Hz); the header is broken or the file is not "
+                        "a recording — re-export it, e.g. 'ffmpeg -i IN -ar 16000 OUT.wav'")
+    if sr > lim.max_sample_rate:
+        raise over("max_sample_rate", f"{what} declares {fmt(sr)} Hz")
+    if channels > lim.max_channels:
+        raise over("max_channels", f"{what} declares {fmt(channels)} channels")
+    if not seconds <= lim.max_recording:
+        raise over("max_recording", f"{what} is {fmt(seconds)} s long")
 
 
 def check_count(limit: str, n: int, what: str) -> None:

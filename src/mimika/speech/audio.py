@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import DataError, ParameterError
 from mimika.speech.utterance import _write_atomic
 
@@ -67,6 +68,7 @@ def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
     try:
         with wave.open(str(p), "rb") as w:
             n_ch, width, sr = w.getnchannels(), w.getsampwidth(), w.getframerate()
+            limits.check_recording(w.getnframes() / max(sr, 1), sr, n_ch, repr(str(p)))
             raw = w.readframes(w.getnframes())
     except (wave.Error, EOFError) as e:
         raise DataError(
@@ -110,10 +112,23 @@ def read_media(path: str | os.PathLike) -> tuple[np.ndarray, int]:
             if not c.streams.audio:
                 raise DataError(f"{str(p)!r} has no audio stream")
             st = c.streams.audio[0]
-            rs = av.AudioResampler(format="flt", layout="mono", rate=st.rate or 16000)
-            parts = [f.to_ndarray().reshape(-1) for fr in c.decode(st) for f in rs.resample(fr)]
+            what = repr(str(p))
+            rate = int(st.rate or 0)
+            secs = (float(st.duration * st.time_base) if st.duration and st.time_base
+                    else (c.duration or 0) / 1e6)
+            limits.check_recording(secs, rate, int(st.channels or 1), what)
+            # streamed: mono, at most 48 kHz, and stopped at the limit whatever the header said
+            sr = min(rate, 48_000)
+            most = int(limits.current().max_recording * sr) + sr
+            rs = av.AudioResampler(format="flt", layout="mono", rate=sr)
+            parts, n = [], 0
+            for fr in c.decode(st):
+                for f in rs.resample(fr):
+                    parts.append(f.to_ndarray().reshape(-1))
+                    n += parts[-1].size
+                if n > most:
+                    limits.check_recording(n / sr, sr, 1, what)
             parts += [f.to_ndarray().reshape(-1) for f in rs.resample(None)]
-            sr = int(st.rate or 16000)
     except av.error.FFmpegError as e:
         raise DataError(f"cannot decode {str(p)!r}: {e}") from None
     a = np.concatenate(parts).astype(np.float32) if parts else np.zeros(0, np.float32)
