@@ -59,3 +59,27 @@ def test_a_long_compressed_recording_is_refused_from_its_header(tmp_path):
     assert r.returncode == 2, r.stderr[-500:]
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "max_recording" in lines[0] and "MIMIKA_MAX_RECORDING" in lines[0]
+
+
+# -- leftovers ------------------------------------------------------------------------------------
+def test_a_killed_render_leaves_no_espeak_copy_in_the_temp_folder(tmp_path):
+    import signal
+    import time
+
+    tmp, cache = tmp_path / "tmp", tmp_path / "cache"
+    tmp.mkdir()
+    env = {**os.environ, "TMPDIR": str(tmp), "XDG_CACHE_HOME": str(cache)}
+    say = [sys.executable, "-m", "mimika", "say", "Good evening.", "-o", str(tmp_path / "a.wav")]
+    assert subprocess.run(say, env=env, capture_output=True, timeout=120).returncode == 0
+    copies = list(cache.glob("mimika/espeak/*/libespeak*"))
+    assert len(copies) == 1  # the one copy every run loads
+    p = subprocess.Popen([sys.executable, "-m", "mimika", "news", "--example", "en", "--head",
+                          "builtin", "-o", str(tmp_path / "n.mp4")], env=env,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(6)
+    p.send_signal(signal.SIGKILL)
+    p.wait(30)
+    assert not list(tmp.glob("mimika-espeak-*"))
+    assert list(cache.glob("mimika/espeak/*/libespeak*")) == copies
+    assert subprocess.run(say, env=env, capture_output=True, timeout=120).returncode == 0
+    assert not list(tmp.glob("mimika-espeak-*"))

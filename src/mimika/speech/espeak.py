@@ -23,6 +23,7 @@ import logging
 import os
 import threading
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -75,19 +76,39 @@ class RawSynthesis:
     events: list[tuple[int, int, int, int, Any]]
 
 
-def _private_copy(path: str) -> str:
-    """A copy of the library in a private temporary folder (removed at exit), so that unloading
-    it really unloads it even if something else in the process opened the original."""
-    import atexit
-    import shutil
-    import tempfile
+def _cache_dir() -> Path:
+    """mimika's per-user cache folder (``$XDG_CACHE_HOME/mimika``, else ``~/.cache/mimika``)."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "mimika"
 
-    if "copy" not in _STATE:
-        d = tempfile.mkdtemp(prefix="mimika-espeak-")
-        atexit.register(shutil.rmtree, d, True)
-        dst = os.path.join(d, os.path.basename(path))
+
+def _private_copy(path: str) -> str:
+    """A copy of the library under its own name, so that unloading it really unloads it even
+    if something else in the process opened the original. The copy lives in the per-user
+    cache (one per library version, reused by every run: a killed run leaves nothing behind);
+    where the cache cannot be written, in a temporary folder removed at exit."""
+    import shutil
+
+    if "copy" in _STATE:
+        return _STATE["copy"]
+    st = os.stat(path)
+    d = _cache_dir() / "espeak" / f"{st.st_size:x}-{int(st.st_mtime):x}"
+    dst = d / os.path.basename(path)
+    try:
+        if not dst.is_file() or dst.stat().st_size != st.st_size:
+            d.mkdir(parents=True, exist_ok=True)
+            tmp = d / f".{dst.name}.{os.getpid()}"
+            shutil.copy2(path, tmp)
+            os.replace(tmp, dst)  # atomic: a concurrent run sees the old copy or the new one
+    except OSError:
+        import atexit
+        import tempfile
+
+        t = tempfile.mkdtemp(prefix="mimika-espeak-")
+        atexit.register(shutil.rmtree, t, True)
+        dst = Path(t) / os.path.basename(path)
         shutil.copy2(path, dst)
-        _STATE["copy"] = dst
+    _STATE["copy"] = str(dst)
     return _STATE["copy"]
 
 
