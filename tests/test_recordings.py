@@ -68,10 +68,10 @@ def test_a_killed_render_leaves_no_espeak_copy_in_the_temp_folder(tmp_path):
 
     tmp, cache = tmp_path / "tmp", tmp_path / "cache"
     tmp.mkdir()
-    env = {**os.environ, "TMPDIR": str(tmp), "XDG_CACHE_HOME": str(cache)}
+    env = {**os.environ, "TMPDIR": str(tmp), "MIMIKA_CACHE_DIR": str(cache)}
     say = [sys.executable, "-m", "mimika", "say", "Good evening.", "-o", str(tmp_path / "a.wav")]
     assert subprocess.run(say, env=env, capture_output=True, timeout=120).returncode == 0
-    copies = list(cache.glob("mimika/espeak/*/libespeak*"))
+    copies = list(cache.glob("espeak/*/libespeak*"))
     assert len(copies) == 1  # the one copy every run loads
     p = subprocess.Popen([sys.executable, "-m", "mimika", "news", "--example", "en", "--head",
                           "builtin", "-o", str(tmp_path / "n.mp4")], env=env,
@@ -80,6 +80,6 @@ def test_a_killed_render_leaves_no_espeak_copy_in_the_temp_folder(tmp_path):
     p.send_signal(signal.SIGKILL)
     p.wait(30)
     assert not list(tmp.glob("mimika-espeak-*"))
-    assert list(cache.glob("mimika/espeak/*/libespeak*")) == copies
+    assert list(cache.glob("espeak/*/libespeak*")) == copies
     assert subprocess.run(say, env=env, capture_output=True, timeout=120).returncode == 0
     assert not list(tmp.glob("mimika-espeak-*"))

@@ -245,8 +245,6 @@ MIN_SAMPLE_RATE = 4000
 def check_recording(seconds: float, sr: float, channels: int, what: str) -> None:
     """Refuse a recording, from what its header declares, before it is decoded: longer than
     ``max_recording``, a rate outside 4 kHz … ``max_sample_rate``, over ``max_channels``."""
-    from mimika.errors import DataError
-
     lim = current()
     if not sr >= MIN_SAMPLE_RATE:
         raise DataError(f"{what}: a sample rate of {fmt(sr)} Hz cannot hold speech (at least "

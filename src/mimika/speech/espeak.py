@@ -76,12 +76,6 @@ class RawSynthesis:
     events: list[tuple[int, int, int, int, Any]]
 
 
-def _cache_dir() -> Path:
-    """mimika's per-user cache folder (``$XDG_CACHE_HOME/mimika``, else ``~/.cache/mimika``)."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "mimika"
-
-
 def _private_copy(path: str) -> str:
     """A copy of the library under its own name, so that unloading it really unloads it even
     if something else in the process opened the original. The copy lives in the per-user
@@ -89,10 +83,12 @@ def _private_copy(path: str) -> str:
     where the cache cannot be written, in a temporary folder removed at exit."""
     import shutil
 
+    from mimika.cachedir import cache_dir
+
     if "copy" in _STATE:
         return _STATE["copy"]
     st = os.stat(path)
-    d = _cache_dir() / "espeak" / f"{st.st_size:x}-{int(st.st_mtime):x}"
+    d = cache_dir("espeak", f"{st.st_size:x}-{int(st.st_mtime):x}")
     dst = d / os.path.basename(path)
     try:
         if not dst.is_file() or dst.stat().st_size != st.st_size:

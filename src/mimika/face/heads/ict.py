@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mimika.cachedir import cache_dir
 from mimika.errors import DataError, ParameterError
 from mimika.face.head import Head, MeshObject, Part
 from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet, load_table
@@ -31,7 +32,6 @@ __all__ = ["IctData", "find_ict_dir", "identity_weights", "load_ict", "load_ict_
            "load_ict_head", "load_ict_identities", "with_identity"]
 
 ENV_DIR = "MIMIKA_ICT_DIR"
-ENV_CACHE = "MIMIKA_CACHE_DIR"
 NEUTRAL = "generic_neutral_mesh.obj"
 INDICES = "vertex_indices.json"
 _CACHE_VERSION = 1
@@ -104,10 +104,6 @@ class IctData:
     deltas: np.ndarray
 
 
-def _cache_dir() -> Path:
-    return Path(os.environ.get(ENV_CACHE) or Path.home() / ".cache" / "mimika").expanduser()
-
-
 def _shape_files(folder: Path) -> tuple[list[str], list[Path]]:
     try:
         info = json.loads((folder / INDICES).read_text("utf-8"))
@@ -169,7 +165,7 @@ def load_ict_data(path: str | os.PathLike | None = None, *, cache: bool = True) 
     names, files = _shape_files(folder)
     t0 = time.perf_counter()
     arrays: dict[str, np.ndarray] | None = None
-    cfile = _cache_dir() / f"ict-{_cache_key(folder, files)}.npz"
+    cfile = cache_dir() / f"ict-{_cache_key(folder, files)}.npz"
     if cache and cfile.is_file():
         try:
             with np.load(cfile, allow_pickle=False) as z:
@@ -234,7 +230,7 @@ def load_ict_identities(path: str | os.PathLike | None = None, *,
     missing = [f.name for f in files if not f.is_file()]
     if missing:
         raise DataError(f"{folder}: identity files missing: {', '.join(missing)}")
-    cfile = _cache_dir() / f"ict-id-{_cache_key(folder, files)}.npz"
+    cfile = cache_dir() / f"ict-id-{_cache_key(folder, files)}.npz"
     if cache and cfile.is_file():
         try:
             with np.load(cfile, allow_pickle=False) as z:

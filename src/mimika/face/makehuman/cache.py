@@ -9,12 +9,12 @@ atomically and rebuilt when unreadable or from another version.
 from __future__ import annotations
 
 import logging
-import os
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
+from mimika.cachedir import cache_dir as mimika_cache
 from mimika.face.makehuman.anny import ANNY_VERSION
 from mimika.face.makehuman.build import Built, Piece
 from mimika.face.makehuman.skeleton import Skeleton
@@ -26,7 +26,7 @@ VERSION = 7
 
 
 def cache_dir() -> Path:
-    return Path(os.environ.get("MIMIKA_CACHE_DIR", "~/.cache/mimika")).expanduser() / "characters"
+    return mimika_cache("characters")
 
 
 def cache_path(key: str) -> Path:

@@ -10,26 +10,22 @@ import hashlib
 import io
 import json
 import logging
-import os
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from mimika.cachedir import cache_dir as mimika_cache
 from mimika.io.atomic import atomic_write
 
 log = logging.getLogger(__name__)
 
 #: bump when any painter changes its output
 PAINT_VERSION = 1
-ENV_CACHE = "MIMIKA_CACHE_DIR"
-
-
 def cache_dir() -> Path:
     """Where painted textures are kept."""
-    root = os.environ.get(ENV_CACHE) or Path.home() / ".cache" / "mimika"
-    return Path(root).expanduser() / "paint"
+    return mimika_cache("paint")
 
 
 def piece_digest(*arrays: np.ndarray | None) -> str:
