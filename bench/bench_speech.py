@@ -1,9 +1,11 @@
-"""Speech throughput on one core: text → audio + mouth AU track (goal ≥ 100× real time),
-mouth track alone, viseme export, and alignment of a recording (× real time).
+"""espeak-ng speech throughput on one core: text → audio + mouth AU track (goal ≥ 100× real
+time), mouth track alone, viseme export, and alignment of a recording (× real time). The
+Piper voice is measured by bench_tts.py.
 
 Run: ``.venv/bin/python bench/bench_speech.py``
 """
 
+import os
 import sys
 from pathlib import Path
 
@@ -12,6 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 from _common import rate, report, single_core
 
 single_core()
+os.environ["MIMIKA_TTS"] = "espeak"
 
 from mimika.speech.alignment import align
 from mimika.speech.coarticulation import mouth_track

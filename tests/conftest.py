@@ -5,6 +5,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+# The suite's speech tests pin espeak-ng (every language, exact phoneme events, ~400× real
+# time); the neural Piper voice, the default for English, is tested in test_speech_piper.py
+# (which clears this). Set before any mimika import reads it.
+os.environ.setdefault("MIMIKA_TTS", "espeak")
+
 
 def ict_dir() -> Path | None:
     d = os.environ.get("MIMIKA_ICT_DIR")

@@ -73,3 +73,14 @@ def add_head_arg(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("--head", default=DEFAULT_HEAD,
                         help=HEAD_HELP.format(default=DEFAULT_HEAD))
+
+
+def add_voice_args(parser: argparse.ArgumentParser) -> None:
+    """``--voice`` and ``--engine``: who speaks (:func:`mimika.speech.tts.choose_engine`)."""
+    parser.add_argument("--voice", help="a Piper voice (PATH.onnx, or a name from 'mimika "
+                                        "voices': en_US-joe-medium, joe) or an espeak-ng "
+                                        "variant (f3, m2, klatt …)")
+    parser.add_argument("--engine", choices=("auto", "piper", "espeak"),
+                        help="speech engine: auto (default, or $MIMIKA_TTS) speaks with a "
+                             "neural Piper voice where one speaks the language, else "
+                             "espeak-ng")

@@ -9,6 +9,7 @@ from pathlib import Path
 from mimika.commands._util import (
     add_head_arg,
     add_light_arg,
+    add_voice_args,
     limit_options,
     progress_bar,
     size_arg,
@@ -82,7 +83,7 @@ def cmd_news(args: argparse.Namespace) -> int:
         raise ParameterError("--audio works with -o, not with --ablations")
     kw = dict(lang=lang, head=args.head, fps=args.fps, size=args.size, view=args.view,
               voice=args.voice, rate=args.rate, samples=args.samples, seed=args.seed,
-              workers=args.workers, mood=args.mood, light=args.light)
+              workers=args.workers, mood=args.mood, light=args.light, engine=args.engine)
     if args.ablations is not None:
         def prog(name: str, done: int, total: int, _bars: dict = {}) -> None:  # noqa: B006
             bar = _bars.setdefault(name, progress_bar(args.quiet, f"{name:<18}"))
@@ -120,9 +121,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--example", choices=("en", "de"),
                    help="read the bundled example bulletin instead of a file")
     p.add_argument("-o", "--output", help="output video (.mp4); subtitles go beside it (.srt)")
-    p.add_argument("--lang", help="espeak language: en, de, pl … (default en)")
+    p.add_argument("--lang", help="language: en, de, pl … (default en)")
     add_head_arg(p)
-    p.add_argument("--voice", help="espeak voice variant (f3, m2, klatt …)")
+    add_voice_args(p)
     p.add_argument("--audio", metavar="FILE",
                    help="a recording of the article (WAV, MP3 …, any voice): align the text "
                         "to it and use it as the sound instead of espeak-ng")

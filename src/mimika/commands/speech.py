@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mimika.commands._util import limit_options
+from mimika.commands._util import add_voice_args, limit_options
 from mimika.errors import ParameterError
 
 VISEME_FORMATS = ("oculus", "rhubarb", "mpeg4", "seed004", "talkinghead", "ovr")
@@ -51,7 +51,7 @@ def cmd_say(args: argparse.Namespace) -> int:
     if text is None:
         raise ParameterError("give the text to speak, or --text-file FILE")
     utt = synthesize(text, lang=args.lang, voice=args.voice, rate=args.rate, pitch=args.pitch,
-                     ssml=args.ssml)
+                     ssml=args.ssml, engine=args.engine)
     done = []
     if args.output:
         write_wav(args.output, utt.audio, sr=utt.sr)
@@ -105,13 +105,24 @@ def cmd_align(args: argparse.Namespace) -> int:
 
 
 def cmd_voices(args: argparse.Namespace) -> int:
+    from mimika.speech import piper
     from mimika.speech.espeak import check_lang, list_variants, list_voices
 
     if args.lang:
         check_lang(args.lang)
+    neural = piper.list_voices(args.lang)
+    print("Piper neural voices (--voice NAME or PATH.onnx; the first of a language is its "
+          "default):")
+    for v in neural:
+        print(f"  {v.language:14} {v.name:32} {v.quality:8} {v.sample_rate} Hz  {v.source}")
+    if not neural:
+        print("  none" + ("" if piper.available() else
+                          " (Piper is not installed: pip install 'mimika[speech]')"))
+    print(f"  voice folders: {', '.join(str(d) for d in piper.voice_dirs())}")
+    print("\nespeak-ng voices (every language; --engine espeak):")
     voices = list_voices(args.lang)
     for v in sorted(voices, key=lambda v: v.languages[0] if v.languages else ""):
-        print(f"{(v.languages[0] if v.languages else ''):16} {v.name:40} {v.gender}")
+        print(f"  {(v.languages[0] if v.languages else ''):16} {v.name:40} {v.gender}")
     if args.variants:
         print("\nvariants (use as --voice NAME or LANG+NAME):")
         print("  " + " ".join(list_variants()))
@@ -138,17 +149,18 @@ def _outputs(q: argparse.ArgumentParser) -> None:
                    help="viseme set for --visemes (default oculus)")
     q.add_argument("--fps", type=_fps, default=25.0,
                    help="frame rate of --aus and of per-frame visemes (ovr, .csv; default 25)")
-    q.add_argument("--voice", help="espeak voice variant (f3, m2 …) or voice name")
     q.add_argument("-q", "--quiet", action="store_true")
 
 
 def register(sub) -> None:
-    q = sub.add_parser("say", help="speak text (espeak-ng) → WAV, mouth AU CSV, viseme JSON")
+    q = sub.add_parser("say", help="speak text (Piper or espeak-ng) → WAV, mouth AU CSV, "
+                                   "viseme JSON")
     q.add_argument("text", nargs="?", help="text to speak (or --text-file)")
     q.add_argument("--text-file", metavar="FILE", help="read the text from a UTF-8 file")
     q.add_argument("--lang", default="en", help="espeak language: en, en-us, de, pl … (en)")
     q.add_argument("--rate", type=int, default=175, help="words per minute, 80–450 (175)")
-    q.add_argument("--pitch", type=int, default=50, help="base pitch 0–100 (50)")
+    q.add_argument("--pitch", type=int, default=50, help="base pitch 0–100 (50; espeak-ng)")
+    add_voice_args(q)
     q.add_argument("--ssml", action="store_true",
                    help="the text is SSML (<prosody rate pitch>, <break time>)")
     q.add_argument("-o", "--output", metavar="FILE.wav", help="WAV file to write (16-bit mono)")
@@ -165,12 +177,14 @@ def register(sub) -> None:
                    help="auto: pocketsphinx for English, DTW against espeak-ng otherwise")
     a.add_argument("--transcript-file", metavar="FILE", help="read the transcript from a file")
     a.add_argument("--lang", default="en", help="espeak language of the transcript (en)")
+    a.add_argument("--voice", help="espeak-ng variant of the DTW reference (f3, m2 …)")
     a.add_argument("-o", "--output", metavar="FILE.json", help="timing JSON to write")
     _outputs(a)
     limit_options(a, "max_duration")
     a.set_defaults(func=cmd_align)
 
-    v = sub.add_parser("voices", help="list espeak-ng voices (and --variants)")
+    v = sub.add_parser("voices", help="list Piper neural voices and espeak-ng voices "
+                                      "(and --variants)")
     v.add_argument("--lang", help="only voices for this language (prefix: en lists en-us)")
     v.add_argument("--variants", action="store_true", help="also list voice variants")
     v.set_defaults(func=cmd_voices)

@@ -7,7 +7,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import add_head_arg, limit_options, size_arg
+from mimika.commands._util import add_head_arg, add_voice_args, limit_options, size_arg
 from mimika.errors import ParameterError
 
 CSV_FORMATS = ("au", "openface", "arkit")
@@ -136,7 +136,7 @@ def _render_video(args: argparse.Namespace, tl) -> int:
     art = replace(parse_article(text, source=args.script), script=tl)
     res = render_news(art, out=args.output, lang=args.lang, head=args.head,
                       fps=float(args.fps or 25.0), layers=("blink", "skin"),
-                      voice=args.voice, audio=args.audio, mood=args.mood,
+                      voice=args.voice, engine=args.engine, audio=args.audio, mood=args.mood,
                       progress=progress_bar(args.quiet, "rendering"))
     _say(args, f"wrote {res.video} ({res.n_frames} frames, {res.duration:.2f} s of speech)")
     return 0
@@ -286,7 +286,7 @@ def register(sub) -> None:
     r.add_argument("--rate", type=float, help="seconds per vowel unit for text timing (0.16)")
     r.add_argument("-v", "--verbose", action="store_true", help="also show suggestions")
     r.add_argument("--lang", default="en", help="espeak language of the speech (.mp4; en)")
-    r.add_argument("--voice", help="espeak voice variant (.mp4)")
+    add_voice_args(r)
     r.add_argument("--audio", metavar="FILE", help="a recording of the script's text (.mp4)")
     r.add_argument("--mood", help="mood of the behaviour (.mp4; default the script's)")
     r.set_defaults(func=cmd_render)

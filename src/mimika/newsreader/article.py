@@ -64,16 +64,6 @@ def parse_article(text: str, *, source: str = "<article>") -> Article:
     return Article(tuple(p for p in paras if p), None, source)
 
 
-def _shift(utt: Any, dt: float, char0: int) -> tuple[list, list, list]:
-    from mimika.speech import Phone, Sentence, Word
-
-    ph = [Phone(p.symbol, p.start + dt, p.end + dt, p.stress) for p in utt.phonemes]
-    ws = [Word(w.text, w.start + dt, w.end + dt, w.offset + char0 if w.offset >= 0 else -1)
-          for w in utt.words]
-    ss = [Sentence(s.text, s.start + dt, s.end + dt) for s in utt.sentences]
-    return ph, ws, ss
-
-
 def _pad(utt: Any, lead: float, tail: float) -> Any:
     """``utt`` with ``lead`` s of silence before and ``tail`` s after (times shifted)."""
     from mimika.speech import Phone, Utterance
@@ -83,7 +73,7 @@ def _pad(utt: Any, lead: float, tail: float) -> Any:
     d = n0 / sr
     audio = np.concatenate([np.zeros(n0, np.float32), utt.audio.astype(np.float32),
                             np.zeros(n1, np.float32)])
-    ph, ws, ss = _shift(utt, d, 0)
+    ph, ws, ss = utt.shifted(d)
     ph = [Phone("_", 0.0, d), *ph, Phone("_", ph[-1].end if ph else d, len(audio) / sr)]
     merged: list = []
     for p in ph:
@@ -151,8 +141,10 @@ def align_article(article: Article, audio: np.ndarray, *, sr: int, lang: str = "
 
 def speak_article(article: Article, *, lang: str = "en", voice: str | None = None,
                   rate: int = 165, pitch: int = 50, sentence_gap: float = SENTENCE_GAP,
-                  paragraph_gap: float = PARAGRAPH_GAP) -> tuple[Any, list[float]]:
-    """Synthesise every sentence with espeak-ng and join them with pauses.
+                  paragraph_gap: float = PARAGRAPH_GAP, engine: str | None = None
+                  ) -> tuple[Any, list[float]]:
+    """Synthesise every sentence (``engine``/``voice`` as in
+    :func:`mimika.speech.tts.synthesize`) and join them with pauses.
 
     Returns ``(utterance, paragraph_starts)``: one :class:`~mimika.speech.Utterance` (audio
     float32 mono at ``sr``, phones tiling it, words and sentences in seconds) and the start
@@ -193,7 +185,8 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
     for _pi, para in enumerate(article.paragraphs):
         pieces = split_sentences(para) or [(para, 0)]
         for si, (sent, off) in enumerate(pieces):
-            u = synthesize(sent, lang=lang, voice=voice, rate=rate, pitch=pitch)
+            u = synthesize(sent, lang=lang, voice=voice, rate=rate, pitch=pitch,
+                           engine=engine)
             if sr is None:
                 sr = u.sr
                 silence(LEAD_IN)
@@ -203,7 +196,7 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
                 silence(sentence_gap)
             if si == 0:
                 para_starts.append(t)
-            ph, ws, _ = _shift(u, t, char_base + off)
+            ph, ws, _ = u.shifted(t, char_base + off)
             if phones and ph and phones[-1].is_pause and ph[0].is_pause:
                 phones[-1] = Phone("_", phones[-1].start, ph[0].end)
                 ph = ph[1:]
@@ -221,9 +214,8 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
     if phones:
         last = phones[-1]
         phones[-1] = Phone(last.symbol, last.start, dur, last.stress)
-    utt = Utterance(audio, int(sr), phones, words, sents, lang=lang, text=full,
-                    meta={"source": "espeak-ng", "voice": voice or lang, "rate": rate,
-                          "pitch": pitch})
+    utt = Utterance(audio, int(sr), phones, words, sents, lang=u.lang, text=full,
+                    meta={**u.meta, "rate": rate, "pitch": pitch})
     log.debug("article: %d paragraphs, %d sentences, %.2f s", len(article.paragraphs),
               len(sents), dur)
     return utt, para_starts

@@ -129,7 +129,7 @@ def news_track(article: Article | str, *, lang: str = "en", fps: float = 25.0,
                rate: int = 165, pitch: int = 50, seed: int | None = None,
                params: dict[str, Any] | None = None, supported: Iterable[str] | None = None,
                utterance: Any = None, paragraph_starts: list[float] | None = None,
-               mood: str | None = None) -> NewsTrack:
+               mood: str | None = None, engine: str | None = None) -> NewsTrack:
     """Speech, behaviour layers and the final blended AU track of an article.
 
     ``utterance`` (with ``paragraph_starts``) reuses an earlier synthesis or an alignment of
@@ -148,7 +148,7 @@ def news_track(article: Article | str, *, lang: str = "en", fps: float = 25.0,
     art = parse_article(article) if isinstance(article, str) else article
     if utterance is None:
         utterance, paragraph_starts = speak_article(art, lang=lang, voice=voice, rate=rate,
-                                                    pitch=pitch)
+                                                    pitch=pitch, engine=engine)
     paras = list(paragraph_starts or [])
     if mood is None and art.script is not None:
         mood = art.script.mood
@@ -254,7 +254,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
                 aus: str | os.PathLike | None = None, crf: int = 23,
                 preset: str = "veryfast", rig: Any = None, news: NewsTrack | None = None,
                 workers: int | None = None, audio: str | os.PathLike | None = None,
-                mood: str | None = None, light: Any = None) -> NewsResult:
+                mood: str | None = None, light: Any = None, engine: str | None = None
+                ) -> NewsResult:
     """Read ``text`` (plain article or ``<speak>`` script) as a newsreader into an MP4.
 
     Writes ``out`` (H.264 yuv420p + AAC, ``fps`` frames/s, frame i showing time i / fps, video
@@ -267,6 +268,7 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     ``audio``: a recording of the text (WAV, MP3 … any voice) — the text is aligned to it and
     the video carries it unchanged, so the video lasts exactly as long as the recording.
     ``mood``: see :func:`news_track`. ``light``: a ``--light`` spec (default ``news``).
+    ``engine``/``voice``: who speaks (:func:`mimika.speech.tts.synthesize`).
     """
     from mimika.render.video import VideoWriter
 
@@ -302,7 +304,7 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
             utt, paras = align_article(art, rec, sr=sr, lang=lang)
             tm["align"] = time.perf_counter() - t1
         else:
-            utt, paras = speak_article(art, lang=lang, voice=voice, rate=rate)
+            utt, paras = speak_article(art, lang=lang, voice=voice, rate=rate, engine=engine)
             tm["tts"] = time.perf_counter() - t1
         t1 = time.perf_counter()
         news = news_track(art, lang=lang, fps=fps, layers=enabled, seed=seed,
@@ -366,7 +368,7 @@ def render_ablations(text: str | Article, *, out_dir: str | os.PathLike, stem: s
     art = parse_article(text) if isinstance(text, str) else text
     lang = kwargs.get("lang", "en")
     utt, paras = speak_article(art, lang=lang, voice=kwargs.get("voice"),
-                               rate=kwargs.get("rate", 165))
+                               rate=kwargs.get("rate", 165), engine=kwargs.get("engine"))
     base = NewsTrack(None, utt, {}, paras, None)  # type: ignore[arg-type]
     results = []
     variants = [("all", frozenset(FEATURES))] + [

@@ -225,7 +225,7 @@ def _dtw_phones(a: np.ndarray, sr: int, transcript: str, lang: str, voice: str |
     span = speech_span(act) or (0.0, dur)
     c0, c1 = max(0.0, span[0] - MARGIN), min(dur, span[1] + MARGIN)
     rec = a[int(c0 * sr):round(c1 * sr)]
-    ref = synthesize(transcript, lang=lang, voice=voice)
+    ref = synthesize(transcript, lang=lang, voice=voice, engine="espeak")
     rspan = speech_span(activity(ref.audio, sr=ref.sr)) or (0.0, ref.duration)
     r0, r1 = max(0.0, rspan[0] - MARGIN), min(ref.duration, rspan[1] + MARGIN)
     ref_mel = mel_power(ref.audio[int(r0 * ref.sr):round(r1 * ref.sr)], sr=ref.sr)

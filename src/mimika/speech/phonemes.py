@@ -39,6 +39,30 @@ def viseme_table() -> dict[str, Any]:
                       .read_text("utf-8"))
 
 
+@cache
+def ipa_table() -> dict[str, str]:
+    """IPA → espeak-ng mnemonic (``speech/data/ipa.json``)."""
+    return json.loads(resources.files("mimika.speech").joinpath("data/ipa.json")
+                      .read_text("utf-8"))["ipa"]
+
+
+def ipa_to_espeak(ph: str) -> str:
+    """IPA → espeak mnemonics, longest match first (``"təˈmɑːtoʊ"`` → ``"t@'mA:toU"``);
+    characters the table lacks are dropped."""
+    table = ipa_table()
+    longest = max(map(len, table))
+    out, i = [], 0
+    while i < len(ph):
+        for n in range(min(longest, len(ph) - i), 0, -1):
+            if ph[i:i + n] in table:
+                out.append(table[ph[i:i + n]])
+                i += n
+                break
+        else:
+            i += 1
+    return "".join(out)
+
+
 def class_names() -> list[str]:
     """All phoneme class names, in table order."""
     return list(viseme_table()["classes"])

@@ -22,13 +22,10 @@ elements of a script anchored at positions stay on the words they wrap.
 
 from __future__ import annotations
 
-import functools
-import json
 import logging
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any
 from xml.parsers import expat
@@ -37,6 +34,7 @@ from xml.sax.saxutils import escape, quoteattr
 import numpy as np
 
 from mimika.errors import DataError, ParameterError
+from mimika.speech.phonemes import ipa_to_espeak
 from mimika.speech.utterance import Phone, Sentence, Utterance, Word
 from mimika.speech.words import Token, tokens, word_spans
 
@@ -100,28 +98,6 @@ def parse(ssml: str) -> list[Item]:
                              f"{e.lineno}, column {e.offset + 1}; escape '<' as &lt; and "
                              "'&' as &amp;") from None
     return items
-
-
-@functools.cache
-def _ipa() -> dict[str, str]:
-    return json.loads(resources.files("mimika.speech").joinpath("data/ipa.json")
-                      .read_text("utf-8"))["ipa"]
-
-
-def ipa_to_espeak(ph: str) -> str:
-    """IPA → espeak mnemonics, longest match first (``"təˈmɑːtoʊ"`` → ``"t@'mA:toU"``)."""
-    table = _ipa()
-    longest = max(map(len, table))
-    out, i = [], 0
-    while i < len(ph):
-        for n in range(min(longest, len(ph) - i), 0, -1):
-            if ph[i:i + n] in table:
-                out.append(table[ph[i:i + n]])
-                i += n
-                break
-        else:
-            i += 1
-    return "".join(out)
 
 
 def _ms(time: str) -> str:

@@ -94,6 +94,15 @@ class Utterance:
             return len(self.audio) / self.sr
         return self.phonemes[-1].end if self.phonemes else 0.0
 
+    def shifted(self, dt: float, char0: int = 0
+                ) -> tuple[list[Phone], list[Word], list[Sentence]]:
+        """Phones, words and sentences moved by ``dt`` s, word offsets by ``char0``."""
+        ph = [Phone(p.symbol, p.start + dt, p.end + dt, p.stress) for p in self.phonemes]
+        ws = [Word(w.text, w.start + dt, w.end + dt, w.offset + char0 if w.offset >= 0 else -1)
+              for w in self.words]
+        ss = [Sentence(x.text, x.start + dt, x.end + dt) for x in self.sentences]
+        return ph, ws, ss
+
     def timing_dict(self) -> dict[str, Any]:
         """The timing as JSON-ready dict (no audio); see ``docs/speech.md`` for the format."""
         r = 4

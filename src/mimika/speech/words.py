@@ -17,7 +17,7 @@ from __future__ import annotations
 import difflib
 import functools
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from mimika.speech.phonemes import strip_stress
@@ -105,22 +105,31 @@ def phonemize(text: str, *, lang: str) -> list[tuple[str, int]]:
     return list(_phonemize_cached(text, lang))
 
 
-def assign_phones(phones: Sequence[Phone], toks: Sequence[Token], *, lang: str
+#: how a reader says a token: text → the symbols to match against the phones
+Reader = Callable[[str], Sequence[str]]
+
+
+def assign_phones(phones: Sequence[Phone], toks: Sequence[Token], *, lang: str,
+                  read: Reader | None = None, symbols: Sequence[str] | None = None
                   ) -> list[int]:
     """The token index of every phone (-1 for pauses).
 
     The phones of the whole sentence are matched (``difflib``) against the concatenated
     per-token phonemes; replaced runs are shared out in order, phones espeak added in context
-    go to the token before them.
+    go to the token before them. ``read`` and ``symbols`` (one per phone) replace espeak-ng's
+    mnemonics when the phones come from elsewhere (a Piper voice matches on its own IPA).
     """
+    if read is None:
+        def read(text: str) -> list[str]:
+            return [sym for sym, _ in phonemize(text, lang=lang)]
     seq_b: list[str] = []
     owner_b: list[int] = []
     for k, t in enumerate(toks):
-        for sym, _ in phonemize(t.say, lang=lang):
+        for sym in read(t.say):
             seq_b.append(sym)
             owner_b.append(k)
     idx = [i for i, p in enumerate(phones) if not p.is_pause]
-    seq_a = [phones[i].symbol for i in idx]
+    seq_a = [(symbols[i] if symbols is not None else phones[i].symbol) for i in idx]
     own = [-1] * len(seq_a)
     sm = difflib.SequenceMatcher(a=seq_a, b=seq_b, autojunk=False)
     for op, i1, i2, j1, j2 in sm.get_opcodes():
@@ -144,13 +153,14 @@ def assign_phones(phones: Sequence[Phone], toks: Sequence[Token], *, lang: str
     return out
 
 
-def word_spans(phones: Sequence[Phone], toks: Sequence[Token], *, lang: str
+def word_spans(phones: Sequence[Phone], toks: Sequence[Token], *, lang: str,
+               read: Reader | None = None, symbols: Sequence[str] | None = None
                ) -> list[tuple[int, Word]]:
     """``(token index, Word)`` for the tokens that were spoken: text as written, times of their
-    phones."""
+    phones (``read``/``symbols`` as in :func:`assign_phones`)."""
     if not toks:
         return []
-    own = assign_phones(phones, toks, lang=lang)
+    own = assign_phones(phones, toks, lang=lang, read=read, symbols=symbols)
     spans: dict[int, list[float]] = {}
     for p, o in zip(phones, own, strict=True):
         if o >= 0:
