@@ -40,6 +40,7 @@ EN = [
     ("No. 5", "number 5"),
     ("up 50% or 3.5 %", "up 50 percent or 3.5 percent"),
     ("1,000 people", "1,000 people"),
+    ("£2bn deal", "2 billion pounds deal"),
     ("call 555-1999", "call 555-1999"),
 ]
 
@@ -123,6 +124,9 @@ SAY_AS = [
     ("1234", "cardinal", "en", None, "one thousand two hundred thirty-four"),
     ("1234", "cardinal", "de", None, "eintausendzweihundertvierunddreißig"),
     ("1234", "cardinal", "pl", None, "tysiąc dwieście trzydzieści cztery"),
+    ("1,234", "cardinal", "en", None, "one thousand two hundred thirty-four"),
+    ("-7", "cardinal", "de", None, "minus sieben"),
+    ("10/03/2024", "date", "pl", None, "dziesiątego marca dwa tysiące dwadzieścia cztery"),
     ("ABC", "characters", "en", None, "A B C"),
     ("A1c", "characters", "de", None, "A 1 c"),
     ("XYZ", "characters", "pl", None, "X Y Z"),
@@ -146,7 +150,8 @@ def test_say_as_other_language_keeps_text_but_spaces_characters() -> None:
 
 @pytest.mark.parametrize(("text", "kind", "fmt"), [
     ("10/03", "date", "dmy"), ("45/03/2024", "date", "dmy"), ("10/03/2024", "date", "dxy"),
-    ("25:00", "time", None), ("abc", "cardinal", None), ("x", "spell", None),
+    ("25:00", "time", None), ("abc", "cardinal", None), ("3.5", "cardinal", None),
+    ("x", "spell", None),
 ])
 def test_say_as_refuses_what_it_cannot_read(text: str, kind: str, fmt: str | None) -> None:
     with pytest.raises(ParameterError):

@@ -289,7 +289,7 @@ def _currency_spans(text: str, table: Table) -> Iterator[Span]:
     scale = _alternation(list(scales))
     patterns = [
         rf"(?<![\w.,])(?P<num>{_NUM})\s?(?:(?P<scale>{scale})\s?)?(?P<sym>{symbols})(?!\w)",
-        rf"(?P<sym>{prefix})\s?(?P<num>{_NUM})(?:\s(?P<scale>{scale})(?!\w))?",
+        rf"(?P<sym>{prefix})\s?(?P<num>{_NUM})(?:\s?(?P<scale>{scale})(?!\w))?",
     ]
     for pattern in patterns:
         for m in re.finditer(pattern, text):
@@ -484,10 +484,11 @@ def no_break_after(text: str, pos: int, lang: str) -> bool:
 
 
 def _parse_int(text: str) -> int:
-    digits = re.sub(r"[\s\u00a0,.'’]", "", text.strip())
-    if not re.fullmatch(r"[+-]?\d+", digits):
+    """A whole number, digits grouped by threes or not ("1,234", "1 234", "1234")."""
+    written = text.strip()
+    if not re.fullmatch(r"[+-]?(?:\d{1,3}(?:[\s\u00a0,.'’]\d{3})+|\d+)", written):
         raise ParameterError(f"say-as: {text!r} is not a whole number")
-    return int(digits)
+    return int(re.sub(r"[\s\u00a0,.'’]", "", written))
 
 
 def _date_words(values: dict[str, int], table: Table, lang: str) -> str:
