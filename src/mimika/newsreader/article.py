@@ -183,7 +183,7 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
         t += d
 
     for _pi, para in enumerate(article.paragraphs):
-        pieces = split_sentences(para) or [(para, 0)]
+        pieces = split_sentences(para, lang) or [(para, 0)]
         for si, (sent, off) in enumerate(pieces):
             u = synthesize(sent, lang=lang, voice=voice, rate=rate, pitch=pitch,
                            engine=engine)

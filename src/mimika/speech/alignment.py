@@ -349,7 +349,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
              for k, t in enumerate(toks) if k in spans]
     phones, owner = unpad(phones, owner)
     sents = []
-    for text, c0 in split_sentences(transcript):
+    for text, c0 in split_sentences(transcript, lang):
         ws = [w for w in words if c0 <= w.offset < c0 + len(text)]
         if ws:
             sents.append(Sentence(text, ws[0].start, ws[-1].end))

@@ -368,9 +368,11 @@ def synthesize_sentence(info: VoiceInfo, sentence: str, *, offset: int = 0, rate
     """One sentence spoken by the Piper voice ``info``: audio (float32 mono at the voice's
     rate) and phones timed by the voice's own durations; words are the written tokens
     (character offsets + ``offset``)."""
-    from mimika.speech.words import tokens, word_spans
+    from mimika.speech.words import read_aloud, word_spans
 
     voice = _load(info.model, info.config)
+    lang = voice_language(info)
+    said, toks = read_aloud(sentence, lang, offset=offset)
     scale = voice.config.length_scale * NATURAL_RATE / max(int(rate), 1)
     sr = voice.config.sample_rate
     audio: list[np.ndarray] = []
@@ -378,7 +380,7 @@ def synthesize_sentence(info: VoiceInfo, sentence: str, *, offset: int = 0, rate
     ipa: list[str] = []
     n = 0
     timed = True
-    for ch in _chunks(voice, sentence, scale):
+    for ch in _chunks(voice, said, scale):
         a = ch.audio_float_array.astype(np.float32)
         timing = _symbol_samples(voice, ch)
         if timing is not None:
@@ -404,8 +406,6 @@ def synthesize_sentence(info: VoiceInfo, sentence: str, *, offset: int = 0, rate
     if phones:
         last = phones[-1]
         phones[-1] = Phone(last.symbol, last.start, n / sr, last.stress)
-    lang = voice_language(info)
-    toks = tokens(sentence, offset=offset)
     if timed:
         words = [w for _, w in word_spans(phones, toks, lang=lang, symbols=ipa,
                                           read=lambda t: _read_ipa(info, t))]

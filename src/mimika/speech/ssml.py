@@ -34,9 +34,10 @@ from xml.sax.saxutils import escape, quoteattr
 import numpy as np
 
 from mimika.errors import DataError, ParameterError
+from mimika.speech.normalize import say_as
 from mimika.speech.phonemes import ipa_to_espeak
 from mimika.speech.utterance import Phone, Sentence, Utterance, Word
-from mimika.speech.words import Token, tokens, word_spans
+from mimika.speech.words import Token, read_aloud, tokens, word_spans
 
 log = logging.getLogger(__name__)
 
@@ -131,8 +132,14 @@ def _read_audio(src: str, base: Path | None, sr: int) -> np.ndarray | None:
     return resample(a, orig_sr=r, target_sr=sr)
 
 
-def _pieces(items: Sequence[Item], *, sr: int, base: Path | None) -> list[_Piece]:
-    """Split ``items`` into espeak calls (at ``audio`` elements) with their tokens."""
+#: say-as kinds mimika reads itself (mimika.speech.normalize.say_as), in every language
+_READ = {"date", "time", "ordinal", "cardinal", "number", "telephone"}
+
+
+def _pieces(items: Sequence[Item], *, sr: int, base: Path | None, lang: str = "en"
+            ) -> list[_Piece]:
+    """Split ``items`` into espeak calls (at ``audio`` elements) with their tokens; text is
+    given as read aloud (numbers, abbreviations; ``say-as`` date, time, ordinal …)."""
     pieces = [_Piece()]
     stack: list[tuple[str, str]] = []  # (open tag as written for espeak, close tag)
     skip = 0  # inside an element whose text is not spoken
@@ -148,11 +155,19 @@ def _pieces(items: Sequence[Item], *, sr: int, base: Path | None) -> list[_Piece
                 sub[-1] = (i, sub[-1][1])
             if not skip:
                 text = tag
-                cur.body.append(escape(text))
                 say = spoken[-1] if spoken else None
-                for t in tokens(text):
-                    cur.toks.append(Token(t.text, t.offset, say))
-                    cur.items.append(i)
+                if isinstance(say, tuple):  # a say-as read by mimika: one token
+                    reading = say_as(text, say[0], lang, say[1])
+                    cur.body.append(escape(reading))
+                    toks = [Token(" ".join(text.split()), 0, reading)] if text.strip() else []
+                elif say is None:
+                    said, toks = read_aloud(text, lang)
+                    cur.body.append(escape(said))
+                else:
+                    cur.body.append(escape(text))
+                    toks = [Token(t.text, t.offset, say) for t in tokens(text)]
+                cur.toks += toks
+                cur.items += [i] * len(toks)
             i += 1
             continue
         attrs = it[2] if len(it) > 2 else {}
@@ -170,6 +185,16 @@ def _pieces(items: Sequence[Item], *, sr: int, base: Path | None) -> list[_Piece
                             if items[i][1] == "audio" else 0
                 i += 1
                 continue
+        kind_as = attrs.get("interpret-as", "").lower()
+        if tag == "say-as" and kind in ("open", "close") and (
+                kind_as in _READ if kind == "open" else spoken and isinstance(spoken[-1], tuple)):
+            if kind == "open":  # not passed to espeak-ng: mimika reads it
+                spoken.append(("cardinal" if kind_as == "number" else kind_as,
+                               attrs.get("format")))
+            else:
+                spoken.pop()
+            i += 1
+            continue
         if tag in _SILENT:
             skip += {"open": 1, "close": -1}.get(kind, 0)
         elif tag in _PASS or tag == "lang":
@@ -186,9 +211,9 @@ def _pieces(items: Sequence[Item], *, sr: int, base: Path | None) -> list[_Piece
                     cur.body.append(escape(attrs.get("alias", "")))
                     sub.append((-1, attrs.get("alias", "")))
                     skip += 1
-                if tag == "say-as" and attrs.get("interpret-as", "") in (
-                        "characters", "spell-out", "tts:char"):
-                    spoken.append("*chars*")
+                if tag == "say-as":  # balanced with its close; espeak-ng reads the rest
+                    spoken.append("*chars*" if kind_as in (
+                        "characters", "spell-out", "tts:char") else None)
             else:
                 if tag == "sub" and sub:
                     first, alias = sub.pop()
@@ -246,7 +271,7 @@ def speak(items: Sequence[Item], *, lang: str = "en", voice: str | None = None,
     words: list[Word] = []
     word_item: list[int] = []
     t = 0.0
-    for piece in _pieces(items, sr=sr, base=base):
+    for piece in _pieces(items, sr=sr, base=base, lang=code):
         if piece.audio is not None:
             a = piece.audio.astype(np.float32)
             ph = [Phone("_", 0.0, len(a) / sr)]
@@ -274,7 +299,7 @@ def speak(items: Sequence[Item], *, lang: str = "en", voice: str | None = None,
     positions = _positions(len(items), words, word_item, t)
     plain = plain_text(items)
     sents, pos = [], 0
-    for text, _ in split_sentences(plain):
+    for text, _ in split_sentences(plain, code):
         n = len(tokens(text))
         ws = words[pos:pos + n]
         if ws:

@@ -39,12 +39,16 @@ _ABBREV = {
 _SENT_END = re.compile(r"[.!?…]+[\"'»”)\]]*(?=\s+|$)")
 
 
-def split_sentences(text: str) -> list[tuple[str, int]]:
+def split_sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
     """Split ``text`` into sentences; returns ``[(sentence, char_offset), …]``.
 
     Breaks after ``. ! ? …`` followed by white space, except after common abbreviations
-    (``Dr.``, ``z.B.``, ``np.`` …) and single capital initials; blank lines also break.
+    (``Dr.``, ``z.B.``, ``np.`` …), single capital initials and what
+    :func:`mimika.speech.normalize.no_break_after` knows for ``lang`` (German ordinals:
+    "am 3. Oktober"); blank lines also break.
     """
+    from mimika.speech.normalize import no_break_after
+
     out: list[tuple[str, int]] = []
     for para in re.finditer(r"\S(?:.*?\S)?(?=\s*\n\s*\n|\s*$)", text, flags=re.S):
         start = para.start()
@@ -55,6 +59,7 @@ def split_sentences(text: str) -> list[tuple[str, int]]:
             last = before[-1].lower().rstrip(".") if before else ""
             if m.group(0).startswith(".") and len(m.group(0)) == 1 and (
                 last in _ABBREV or (len(last) == 1 and last.isalpha())
+                or no_break_after(seg, m.start(), lang)
             ):
                 continue
             piece = seg[pos:m.end()]
@@ -148,11 +153,12 @@ def choose_engine(engine: str | None, lang: str, voice: str | None
 def _espeak_sentence(sent: str, char0: int, *, lang: str, voice: str | None, rate: int,
                      pitch: int, volume: int) -> Utterance:
     from mimika.speech import espeak
-    from mimika.speech.words import tokens, word_times
+    from mimika.speech.words import read_aloud, word_times
 
-    raw = espeak.synth(sent, lang=lang, voice=voice, rate=rate, pitch=pitch, volume=volume)
+    said, toks = read_aloud(sent, lang, offset=char0)
+    raw = espeak.synth(said, lang=lang, voice=voice, rate=rate, pitch=pitch, volume=volume)
     ph = events_to_phones(raw.events, n_samples=len(raw.audio), sr=raw.sr)
-    ws = word_times(ph, tokens(sent, offset=char0), lang=lang)
+    ws = word_times(ph, toks, lang=lang)
     dur = len(raw.audio) / raw.sr
     return Utterance(raw.audio.astype(np.float32) / 32768.0, raw.sr, ph, ws,
                      [Sentence(sent, 0.0, dur)], lang=lang, text=sent)
@@ -237,7 +243,7 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
             voice = None if voice == info.name or (voice or "").endswith(".onnx") else voice
         return speak(parse(text), lang=espeak.check_lang(lang), voice=voice, rate=rate,
                      pitch=pitch, volume=volume)[0]
-    pieces = split_sentences(text)
+    pieces = split_sentences(text, lang)
     if not pieces:
         raise ParameterError("text is empty; give at least one word to speak")
     if kind == "piper":

@@ -69,14 +69,15 @@ def speech_span(act: np.ndarray, *, hop: float = HOP) -> tuple[float, float] | N
 
 def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
                  window: float = EDGE_WINDOW, closure: float = CLOSURE) -> list[Phone]:
-    """Move the boundaries between pauses and speech to where the energy starts and stops.
+    """Move the boundaries between pauses and speech to where the energy starts and stops,
+    earlier or later.
 
-    After a pause (or at the start of the recording), a word may begin at most ``closure`` s
-    before its sound starts (a stop's silent closure), so an earlier boundary moves later (by
-    at most 2·``window``); before a pause (or the end), a word lasts until its sound has
-    faded, so an earlier boundary moves later (by at most ``window``). A phone keeps at least
-    30 ms. Returns as many phones as given, in the same order; a zero-length pause at either
-    end (see :func:`pad`) lets the first and last word move too.
+    After a pause (or at the start of the recording), a word begins ``closure`` s before its
+    first active frame after the pause began (a stop's silent closure), at most 2·``window``
+    from where it was; before a pause (or the end), a word lasts until its last active frame
+    before the pause ends, at most ``window`` from where it was. A phone keeps at least 30 ms.
+    Returns as many phones as given, in the same order; a zero-length pause at either end
+    (see :func:`pad`) lets the first and last word move too.
     """
     keep = 0.03
     n = len(act)
@@ -90,19 +91,26 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
         if a.is_pause == b.is_pause:
             continue
         t = a.end
-        if a.is_pause:  # speech starts
-            lo = frame(t - 2 * window)
+        if a.is_pause:  # speech starts: the first sound after the pause began
+            lo = frame(max(a.start, t - 2 * window))
             on = np.flatnonzero(act[lo:frame(b.end + window)])
             if not len(on):
                 continue
-            new = min((lo + on[0]) * hop - closure, t + 2 * window, b.end - keep)
-        else:  # speech stops
+            new = float(np.clip((lo + on[0]) * hop - closure, t - 2 * window,
+                                t + 2 * window))
+        else:  # speech stops: the last sound before the pause ends
             lo = frame(a.start - window)
-            on = np.flatnonzero(act[lo:frame(t + window)])
+            on = np.flatnonzero(act[lo:frame(min(b.end, t + window))])
             if not len(on):
                 continue
-            new = min((lo + on[-1] + 1) * hop, t + window, b.end - keep if b.end > t else t)
-        if new <= t:
+            new = float(np.clip((lo + on[-1] + 1) * hop, t - window, t + window))
+        lo_t, hi_t = a.start + keep, b.end - keep
+        if b.end <= t:  # a zero-length end pause: only the word before it moves
+            hi_t = t
+        if a.end <= a.start:  # a zero-length start pause
+            lo_t = t
+        new = min(max(new, lo_t), hi_t)
+        if abs(new - t) < 1e-9 or hi_t < lo_t:
             continue
         out[k - 1] = Phone(a.symbol, a.start, new, a.stress)
         out[k] = Phone(b.symbol, new, b.end, b.stress)

@@ -76,6 +76,54 @@ def tokens(text: str, *, offset: int = 0) -> list[Token]:
     return out
 
 
+def read_aloud(text: str, lang: str, *, offset: int = 0) -> tuple[str, list[Token]]:
+    """What a voice is given for ``text`` (numbers, currency, abbreviations as a newsreader
+    reads them: :func:`mimika.speech.normalize.spoken_text`) and the written tokens (+
+    ``offset``) with what is said for each; tokens one reading spans become one token
+    (``$3.5 million`` → "3.5 million dollars")."""
+    from mimika.speech.normalize import spans
+
+    readings = spans(text, lang)
+    toks = tokens(text)
+    if not readings:
+        return text, [Token(t.text, t.offset + offset) for t in toks]
+    out: list[Token] = []
+    k = 0
+    while k < len(toks):
+        a, b = toks[k].offset, toks[k].offset + len(toks[k].text)
+        j, grow = k + 1, True
+        while grow:
+            grow = False
+            for s in readings:
+                if s.start < b and s.end > a and (s.start < a or s.end > b):
+                    a, b, grow = min(a, s.start), max(b, s.end), True
+            while j < len(toks) and toks[j].offset < b:
+                b, j, grow = max(b, toks[j].offset + len(toks[j].text)), j + 1, True
+        inside = [s for s in readings if s.start < b and s.end > a]
+        if not inside:
+            out.append(Token(toks[k].text, toks[k].offset + offset))
+        else:
+            written = text[a:b]
+            lead = len(written) - len(written.lstrip())
+            said, pos = [], a
+            for s in inside:
+                said += [text[pos:s.start], s.spoken]
+                pos = s.end
+            said.append(text[pos:b])
+            out.append(Token(written.strip(), a + lead + offset,
+                             " ".join("".join(said).split())))
+        k = j
+    return _spoken(text, readings), out
+
+
+def _spoken(text: str, readings) -> str:
+    out, pos = [], 0
+    for s in readings:
+        out += [text[pos:s.start], s.spoken]
+        pos = s.end
+    return "".join(out) + text[pos:]
+
+
 _CURRENCY = re.compile(r"([$€£¥])\s?(\d[\d.,]*\d|\d)")
 
 

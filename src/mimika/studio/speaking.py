@@ -28,7 +28,7 @@ def speak_request(text: str, project: Any, *, fps: float) -> Any:
     return SpeakRequest(text=text, lang=str(project.settings.get("lang", "en")), fps=fps)
 
 
-def sentences(text: str) -> list[tuple[str, int]]:
+def sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
     """``[(sentence, char_offset)]`` of ``text`` read as ``mimika news`` reads an article:
     paragraphs (blank lines), whitespace joined, a ``<speak>`` script's spoken text, each
     paragraph split into sentences as the TTS splits them. Offsets count in the joined text."""
@@ -40,14 +40,15 @@ def sentences(text: str) -> list[tuple[str, int]]:
         raise ParameterError("the text is empty; type something to speak")
     out, base = [], 0
     for para in parse_article(text, source="the text").paragraphs:
-        out += [(sent, base + off) for sent, off in split_sentences(para) or [(para, 0)]]
+        out += [(sent, base + off) for sent, off in split_sentences(para, lang) or [(para, 0)]]
         base += len(para) + 2
     return out
 
 
 def synth_segment(state: StudioState, text: str, char0: int, t0: float, *, lang: str,
                   rate: int, fps: float) -> SpeechSegment:
-    """Synthesise one sentence (espeak-ng, serialised) and its mouth track."""
+    """Synthesise one sentence (the default voice for ``lang``, serialised) and its mouth
+    track."""
     from mimika.speech import mouth_track, synthesize
 
     with state.espeak_lock:
@@ -56,7 +57,7 @@ def synth_segment(state: StudioState, text: str, char0: int, t0: float, *, lang:
 
 
 def warm(state: StudioState) -> None:
-    """Start espeak-ng and load the behaviour layers' data, so the first Speak is quick."""
+    """Load the voice and the behaviour layers' data, so the first Speak is quick."""
     from mimika.studio.behaviour import LAYERS, behaviour_track
 
     seg = synth_segment(state, "Good evening.", 0, 0.0, lang="en", rate=175, fps=30.0)
@@ -66,7 +67,7 @@ def warm(state: StudioState) -> None:
 def synth_all(state: StudioState, entry: SpeechEntry, *, fps: float) -> SpeechEntry:
     """Fill ``entry`` with every sentence of its text (for the non-streaming endpoints)."""
     t0 = 0.0
-    for sent, char0 in sentences(entry.text):
+    for sent, char0 in sentences(entry.text, entry.lang):
         seg = synth_segment(state, sent, char0, t0, lang=entry.lang, rate=entry.rate, fps=fps)
         entry.segments.append(seg)
         t0 += seg.duration

@@ -115,7 +115,7 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
 
     try:
         mix = await run_in_threadpool(speaking.mix_of, req.project, st, blend=req.blend)
-        sents = speaking.sentences(req.text)
+        sents = speaking.sentences(req.text, req.lang)
     except MimikaError as e:
         await send.json({"type": "error", "id": sid, "message": plain(str(e))})
         return
