@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import os
 import sys
 import time
 from pathlib import Path
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+os.environ.setdefault("MIMIKA_TTS", "espeak")  # the "recordings" are espeak-ng variants
 
 from mimika.speech.alignment import align
 from mimika.speech.audio import resample

@@ -132,3 +132,32 @@ def test_two_alignments_in_one_process_equal_two_in_fresh_processes(engine):
     assert together[1] == fresh_a
     assert together[0] == fresh_b
     assert together[2] == fresh_b
+
+
+@needs_grid
+def test_pocketsphinx_result_does_not_depend_on_what_it_aligned_before():
+    """Real recordings aligned one after another in one process equal each aligned by a
+    freshly built decoder (all pocketsphinx state lives in the decoder)."""
+    from mimika.speech import sphinx
+
+    ids = sorted(p.stem for p in (speech_dir() / "wav").glob("*.wav"))[50:62]
+    jobs = []
+    for i in ids:
+        a, sr, truth = grid(i)
+        jobs.append((a, sr, " ".join(w for w, _, _ in truth)))
+    warm = [align(a, sr=sr, transcript=t, engine="sphinx").timing_dict()["words"]
+            for a, sr, t in jobs]
+    for (a, sr, t), w in zip(jobs, warm, strict=True):
+        sphinx._decoder.cache_clear()
+        assert align(a, sr=sr, transcript=t, engine="sphinx").timing_dict()["words"] == w
+
+
+def test_pocketsphinx_aligns_clean_synthetic_speech_without_falling_back():
+    from mimika.speech.tts import synthesize
+
+    for text in ("Good evening, and welcome to the news.",
+                 "Will the trains run on time this winter?",
+                 "They call it a small but welcome surprise."):
+        rec = synthesize(text, engine="espeak")
+        u = align(rec.audio, sr=rec.sr, transcript=text, engine="auto")
+        assert u.meta["engine"] == "sphinx", text
