@@ -245,6 +245,31 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
         yield img
 
 
+def _in_background(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Callable[[], Any]:
+    """Start ``fn`` on a daemon thread (a failed run elsewhere does not wait for it); the
+    returned function waits for it and returns its result or raises its error."""
+    import threading
+
+    box: dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            box["value"] = fn(*args, **kwargs)
+        except BaseException as e:  # handed to the caller
+            box["error"] = e
+
+    th = threading.Thread(target=run, name="mimika-background", daemon=True)
+    th.start()
+
+    def wait() -> Any:
+        th.join()
+        if "error" in box:
+            raise box["error"]
+        return box["value"]
+
+    return wait
+
+
 def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en",
                 head: str | None = None, layers: Iterable[str] | None = None,
                 progress: Progress | None = None, fps: float = 25.0,
@@ -286,6 +311,13 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         limits.check_speech(text if isinstance(text, str) else text.text, rate, "the article")
     tm: dict[str, float] = {}
     t_all = time.perf_counter()
+    art = None
+    speech = None
+    if news is None:
+        art = parse_article(text, source="<article>") if isinstance(text, str) else text
+        if audio is None:  # speak while the head loads (the voices release the GIL)
+            speech = _in_background(speak_article, art, lang=lang, voice=voice, rate=rate,
+                                    engine=engine)
     if rig is None:
         from mimika.face.heads import DEFAULT_HEAD, load_head
 
@@ -293,8 +325,7 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         _, rig = load_head(head or DEFAULT_HEAD)
         tm["load_head"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    if news is None:
-        art = parse_article(text, source="<article>") if isinstance(text, str) else text
+    if art is not None:
         t1 = time.perf_counter()
         if audio is not None:
             from mimika.newsreader.article import align_article
@@ -304,8 +335,8 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
             utt, paras = align_article(art, rec, sr=sr, lang=lang)
             tm["align"] = time.perf_counter() - t1
         else:
-            utt, paras = speak_article(art, lang=lang, voice=voice, rate=rate, engine=engine)
-            tm["tts"] = time.perf_counter() - t1
+            utt, paras = speech()
+            tm["tts_wait"] = time.perf_counter() - t1
         t1 = time.perf_counter()
         news = news_track(art, lang=lang, fps=fps, layers=enabled, seed=seed,
                           supported=rig.supported, utterance=utt, paragraph_starts=paras,
