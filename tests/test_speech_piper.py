@@ -172,3 +172,27 @@ def test_the_newsreader_reads_with_the_neural_voice():
     nt = news_track("Good evening. Here is the news.", supported=None)
     assert nt.utterance.meta["source"] == "piper"
     assert nt.track.n_frames >= 25
+
+
+def test_ssml_reaches_the_neural_voice():
+    plain = synthesize("<speak>Good evening, here is the news.</speak>", ssml=True)
+    assert plain.meta["source"] == "piper"
+    pause = synthesize('<speak>Good evening, <break time="1500ms"/> here is the news.</speak>',
+                       ssml=True)
+    assert pause.duration - plain.duration == pytest.approx(1.5, abs=0.2)
+    slow = synthesize('<speak><prosody rate="slow">Good evening, here is the news.</prosody>'
+                      '</speak>', ssml=True)
+    assert slow.duration > 1.15 * plain.duration
+    u = synthesize('<speak><sub alias="World Health Organisation">WHO</sub> met on '
+                   '<say-as interpret-as="date">10/03/2024</say-as>.</speak>', ssml=True)
+    assert [w.text for w in u.words] == ["WHO", "met", "on", "10/03/2024"]
+    assert u.words[0].end - u.words[0].start > 0.6 and u.words[3].end - u.words[3].start > 1.0
+
+
+def test_a_script_is_read_by_the_neural_voice():
+    from mimika.newsreader.pipeline import news_track
+
+    nt = news_track('<speak>Good evening. <break time="500ms"/> Here is the news.</speak>')
+    assert nt.utterance.meta["source"] == "piper"
+    assert [w.text for w in nt.utterance.words] == ["Good", "evening", "Here", "is", "the",
+                                                     "news"]

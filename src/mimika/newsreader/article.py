@@ -89,13 +89,13 @@ def _pad(utt: Any, lead: float, tail: float) -> Any:
     return Utterance(audio, sr, merged, ws, ss, lang=utt.lang, text=utt.text, meta=meta)
 
 
-def _speak_script(article: Article, *, lang: str, voice: str | None, rate: int, pitch: int
-                  ) -> tuple[Any, list[float]]:
-    """A ``<speak>`` script through espeak-ng's SSML mode, with the script's positions timed."""
+def _speak_script(article: Article, *, lang: str, voice: str | None, rate: int, pitch: int,
+                  engine: str | None = None) -> tuple[Any, list[float]]:
+    """A ``<speak>`` script spoken as SSML, with the script's positions timed."""
     from mimika.speech.ssml import items_from_speech, speak
 
     utt, positions = speak(items_from_speech(article.script.speech), lang=lang, voice=voice,
-                           rate=rate, pitch=pitch, base=article.base)
+                           rate=rate, pitch=pitch, base=article.base, engine=engine)
     utt.meta["script_positions"] = positions
     utt = _pad(utt, LEAD_IN, TAIL)
     return utt, [utt.words[0].start if utt.words else LEAD_IN]
@@ -156,7 +156,8 @@ def speak_article(article: Article, *, lang: str = "en", voice: str | None = Non
     from mimika.speech.tts import split_sentences
 
     if article.script is not None:
-        return _speak_script(article, lang=lang, voice=voice, rate=rate, pitch=pitch)
+        return _speak_script(article, lang=lang, voice=voice, rate=rate, pitch=pitch,
+                             engine=engine)
 
     chunks: list[np.ndarray] = []
     phones: list = []

@@ -363,64 +363,89 @@ def _symbol_samples(voice, chunk) -> tuple[list[str], np.ndarray] | None:
     return syms, np.array(counts)
 
 
-def synthesize_sentence(info: VoiceInfo, sentence: str, *, offset: int = 0, rate: int = 175,
-                        volume: int = 100) -> Utterance:
-    """One sentence spoken by the Piper voice ``info``: audio (float32 mono at the voice's
-    rate) and phones timed by the voice's own durations; words are the written tokens
-    (character offsets + ``offset``)."""
-    from mimika.speech.words import read_aloud, word_spans
+#: a piece of speech for :func:`speak_segments`: text at a pace (× the natural rate; IPA in
+#: ``[[…]]`` is spoken as written), or seconds of silence
+Segment = tuple[str, float] | float
 
+
+def speak_segments(info: VoiceInfo, segments: Sequence[Segment], *, rate: int = 175
+                   ) -> tuple[np.ndarray, list[Phone], list[str], bool]:
+    """Audio (float32 at the voice's rate), phones tiling it, their IPA, and whether the
+    model timed them (else one pause per chunk: time the audio with an aligner)."""
     voice = _load(info.model, info.config)
-    lang = voice_language(info)
-    said, toks = read_aloud(sentence, lang, offset=offset)
-    scale = voice.config.length_scale * NATURAL_RATE / max(int(rate), 1)
+    base = voice.config.length_scale * NATURAL_RATE / max(int(rate), 1)
     sr = voice.config.sample_rate
     audio: list[np.ndarray] = []
     phones: list[Phone] = []
     ipa: list[str] = []
     n = 0
     timed = True
-    for ch in _chunks(voice, said, scale):
-        a = ch.audio_float_array.astype(np.float32)
-        timing = _symbol_samples(voice, ch)
-        if timing is not None:
-            syms, counts = timing
-            if counts.sum() > 0:  # the model's frames tile its audio; absorb rounding
-                counts *= len(a) / counts.sum()
-            groups = group_symbols(syms, np.round(counts).astype(int).tolist())
-            ph, sy = _phones(groups, sr, n / sr)
+    for seg in segments:
+        if isinstance(seg, tuple):
+            chunks = [(ch.audio_float_array.astype(np.float32), _symbol_samples(voice, ch))
+                      for ch in _chunks(voice, seg[0], base / max(seg[1], 0.1))]
         else:
-            timed = False
-            ph, sy = [Phone("_", n / sr, (n + len(a)) / sr)], ["_"]
-        if phones and ph and phones[-1].is_pause and ph[0].is_pause:
-            phones[-1] = Phone("_", phones[-1].start, ph[0].end)
-            ph, sy = ph[1:], sy[1:]
-        phones += ph
-        ipa += sy
-        audio.append(a)
-        n += len(a)
-    if not audio:
-        raise ParameterError(f"the Piper voice {info.name} said nothing for {sentence[:40]!r}")
-    wave = np.concatenate(audio) * (volume / 100.0)
-    wave = np.clip(wave, -1.0, 1.0).astype(np.float32)
+            chunks = [(np.zeros(round(seg * sr), np.float32), None)]
+        for a, timing in chunks:
+            if timing is not None:
+                syms, counts = timing
+                if counts.sum() > 0:  # the model's frames tile its audio; absorb rounding
+                    counts *= len(a) / counts.sum()
+                groups = group_symbols(syms, np.round(counts).astype(int).tolist())
+                ph, sy = _phones(groups, sr, n / sr)
+            else:
+                timed = timed and not isinstance(seg, tuple)
+                ph, sy = [Phone("_", n / sr, (n + len(a)) / sr)], ["_"]
+            if phones and ph and phones[-1].is_pause and ph[0].is_pause:
+                phones[-1] = Phone("_", phones[-1].start, ph[0].end)
+                ph, sy = ph[1:], sy[1:]
+            phones += ph
+            ipa += sy
+            audio.append(a)
+            n += len(a)
+    wave = np.concatenate(audio) if audio else np.zeros(0, np.float32)
     if phones:
         last = phones[-1]
         phones[-1] = Phone(last.symbol, last.start, n / sr, last.stress)
+    return wave, phones, ipa, timed
+
+
+def word_spans_ipa(info: VoiceInfo, phones: Sequence[Phone], ipa: Sequence[str],
+                   toks: Sequence, lang: str) -> list[tuple[int, Word]]:
+    """``(token index, Word)`` of the written tokens, matched on the voice's own IPA."""
+    from mimika.speech.words import word_spans
+
+    return word_spans(phones, toks, lang=lang, symbols=ipa, read=lambda t: _read_ipa(info, t))
+
+
+def synthesize_sentence(info: VoiceInfo, sentence: str, *, offset: int = 0, rate: int = 175,
+                        volume: int = 100) -> Utterance:
+    """One sentence spoken by the Piper voice ``info``: audio (float32 mono at the voice's
+    rate) and phones timed by the voice's own durations; words are the written tokens
+    (character offsets + ``offset``)."""
+    from mimika.speech.words import read_aloud
+
+    lang = voice_language(info)
+    said, toks = read_aloud(sentence, lang, offset=offset)
+    wave, phones, ipa, timed = speak_segments(info, [(said, 1.0)], rate=rate)
+    if not len(wave):
+        raise ParameterError(f"the Piper voice {info.name} said nothing for {sentence[:40]!r}")
+    wave = np.clip(wave * (volume / 100.0), -1.0, 1.0).astype(np.float32)
     if timed:
-        words = [w for _, w in word_spans(phones, toks, lang=lang, symbols=ipa,
-                                          read=lambda t: _read_ipa(info, t))]
+        words = [w for _, w in word_spans_ipa(info, phones, ipa, toks, lang)]
     else:  # a model without duration output: time the audio with mimika's aligner
         from mimika.speech.alignment import align
 
         log.info("Piper voice %s gives no durations; aligning its audio", info.name)
-        u = align(wave, sr=sr, transcript=sentence, lang=lang, engine="dtw")
+        u = align(wave, sr=info.sample_rate, transcript=sentence, lang=lang, engine="dtw")
         phones = u.phonemes
         words = [Word(w.text, w.start, w.end, w.offset + offset if w.offset >= 0 else -1)
                  for w in u.words]
-    return Utterance(wave, sr, phones, words, [Sentence(sentence, 0.0, n / sr)], lang=lang,
-                     text=sentence, meta={"source": "piper", "voice": info.name,
-                                          "rate": rate, "timing": "model" if timed
-                                          else "aligned"})
+    dur = len(wave) / info.sample_rate
+    return Utterance(wave, info.sample_rate, phones, words, [Sentence(sentence, 0.0, dur)],
+                     lang=lang, text=sentence,
+                     meta={"source": "piper", "voice": info.name, "rate": rate,
+                           "timing": "model" if timed else "aligned"})
 
 
 @functools.cache
@@ -434,6 +459,6 @@ def voice_language(info: VoiceInfo) -> str:
         return espeak.check_lang(info.language.split("-")[0])
 
 
-__all__ = ["BUNDLED", "ENV_VOICES", "VoiceInfo", "available", "default_voice", "find_voice",
-           "group_symbols", "list_voices", "read_info", "synthesize_sentence", "voice_dirs",
-           "voice_language"]
+__all__ = ["BUNDLED", "ENV_VOICES", "Segment", "VoiceInfo", "available", "default_voice",
+           "find_voice", "group_symbols", "list_voices", "read_info", "speak_segments",
+           "synthesize_sentence", "voice_dirs", "voice_language", "word_spans_ipa"]

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 from xml.parsers import expat
-from xml.sax.saxutils import escape, quoteattr
+from xml.sax.saxutils import escape, quoteattr, unescape
 
 import numpy as np
 
@@ -49,6 +49,80 @@ _ATTRS = {"prosody": ("rate", "pitch", "volume", "range"), "voice": (
     "name", "gender", "age", "variant", "xml:lang"), "break": ("time", "strength"),
     "say-as": ("interpret-as", "format"), "sub": ("alias",), "emphasis": ("level",),
     "mark": ("name",)}
+
+
+class _Phonemes(str):
+    """A ``<phoneme>`` in a piece's body: espeak-ng's ``[[mnemonics]]``, with the element's
+    ``text`` and its ``ipa`` (None for the x-espeak alphabet) for a Piper voice."""
+
+    text: str
+    ipa: str | None
+
+    def __new__(cls, value: str, text: str, ipa: str | None) -> _Phonemes:
+        self = super().__new__(cls, value)
+        self.text, self.ipa = text, ipa
+        return self
+
+
+#: SSML break strengths and prosody rate words (as espeak-ng reads them)
+_STRENGTH = {"none": 0.0, "x-weak": 0.1, "weak": 0.2, "medium": 0.4, "strong": 0.6,
+             "x-strong": 1.0}
+_RATES = {"x-slow": 0.6, "slow": 0.8, "medium": 1.0, "default": 1.0, "fast": 1.25,
+          "x-fast": 1.6}
+
+
+def _attr(tag: str, name: str) -> str | None:
+    m = re.search(rf'\b{name}="([^"]*)"', tag)
+    return unescape(m.group(1)) if m else None
+
+
+def _rate(tag: str) -> float:
+    """The pace factor of a ``<prosody rate=…>`` tag (1 when it has none)."""
+    r = (_attr(tag, "rate") or "").strip().lower()
+    if r in _RATES:
+        return _RATES[r]
+    m = re.fullmatch(r"([+-]?\d+(?:\.\d*)?)(%?)", r)
+    if not m:
+        return 1.0
+    v = float(m.group(1))
+    if m.group(2):
+        return max(v / 100.0, 0.1) if not r.startswith(("+", "-")) else max(1 + v / 100, 0.1)
+    return max(v, 0.1)
+
+
+def piper_segments(body: Sequence[str]) -> list[tuple[str, float] | float]:
+    """A piece's SSML as a Piper voice speaks it: text runs at their ``<prosody rate>`` and
+    ``<break>`` silences (s); IPA ``<phoneme>`` s are spoken as written (``[[…]]``), other
+    elements' text as it stands."""
+    segs: list[tuple[str, float] | float] = []
+    buf: list[str] = []
+    rates = [1.0]
+
+    def flush() -> None:
+        text = " ".join(unescape("".join(buf)).split())
+        if text:
+            segs.append((text, rates[-1]))
+        buf.clear()
+
+    for part in body:
+        if isinstance(part, _Phonemes):
+            buf.append(f" [[{part.ipa}]] " if part.ipa else escape(part.text))
+        elif part.startswith("<break"):
+            flush()
+            t = _attr(part, "time")
+            segs.append(float(t[:-2]) / 1000 if t else
+                        _STRENGTH.get(_attr(part, "strength") or "medium", 0.4))
+        elif part.startswith("<prosody"):
+            flush()
+            rates.append(rates[-1] * _rate(part))
+        elif part.startswith("</prosody"):
+            flush()
+            if len(rates) > 1:
+                rates.pop()
+        elif not part.startswith("<"):
+            buf.append(part)
+    flush()
+    return segs
 
 
 @dataclass
@@ -232,14 +306,15 @@ def _pieces(items: Sequence[Item], *, sr: int, base: Path | None, lang: str = "e
             alpha = attrs.get("alphabet", "ipa").lower()
             mn = ph if alpha in ("x-espeak", "espeak") else ipa_to_espeak(ph)
             if mn:
-                cur.body.append(f"[[{escape(mn)}]]")
-                cur.phonemes = True
                 text = ""
                 j = i + 1
                 while j < len(items) and not (items[j][0] == "close"
                                               and items[j][1] == "phoneme"):
                     text += items[j][1] if items[j][0] == "text" else ""
                     j += 1
+                cur.body.append(_Phonemes(f"[[{escape(mn)}]]", text,
+                                          None if alpha in ("x-espeak", "espeak") else ph))
+                cur.phonemes = True
                 if text.strip():
                     cur.toks.append(Token(" ".join(text.split()), 0, None))
                     cur.items.append(i + 1)
@@ -254,18 +329,27 @@ def _pieces(items: Sequence[Item], *, sr: int, base: Path | None, lang: str = "e
 
 def speak(items: Sequence[Item], *, lang: str = "en", voice: str | None = None,
           rate: int = 175, pitch: int = 50, volume: int = 100,
-          base: Path | None = None) -> tuple[Utterance, list[float]]:
-    """Synthesise SSML ``items`` with espeak-ng; return the utterance and, for every item
-    position 0 … len(items), the time (s) the speech reaches it.
+          base: Path | None = None, engine: str | None = None
+          ) -> tuple[Utterance, list[float]]:
+    """Synthesise SSML ``items``; return the utterance and, for every item position
+    0 … len(items), the time (s) the speech reaches it.
 
-    Words are the written tokens (their ``offset`` is -1: positions, not characters, locate
-    them); ``base`` resolves relative ``audio src``.
+    ``engine``/``voice`` as in :func:`mimika.speech.tts.choose_engine`: espeak-ng reads the
+    SSML itself; a Piper voice speaks its text runs at their ``<prosody rate>``, with the
+    ``<break>`` silences, ``<audio>`` clips and IPA ``<phoneme>`` s (see
+    :func:`piper_segments`). Words are the written tokens (their ``offset`` is -1: positions,
+    not characters, locate them); ``base`` resolves relative ``audio src``.
     """
     from mimika.speech import espeak
-    from mimika.speech.tts import events_to_phones, split_sentences
+    from mimika.speech.tts import choose_engine, events_to_phones, split_sentences
 
-    code = espeak.check_lang(lang)
-    sr = espeak.sample_rate()
+    kind, info = choose_engine(engine, lang, voice)
+    if kind == "piper":
+        from mimika.speech.piper import speak_segments, voice_language, word_spans_ipa
+
+        code, sr = voice_language(info), info.sample_rate
+    else:
+        code, sr = espeak.check_lang(lang), espeak.sample_rate()
     chunks: list[np.ndarray] = []
     phones: list[Phone] = []
     words: list[Word] = []
@@ -276,6 +360,12 @@ def speak(items: Sequence[Item], *, lang: str = "en", voice: str | None = None,
             a = piece.audio.astype(np.float32)
             ph = [Phone("_", 0.0, len(a) / sr)]
             ws: list[Word] = []
+        elif info is not None:
+            a, ph, ipa, _ = speak_segments(info, piper_segments(piece.body), rate=rate)
+            a = np.clip(a * (volume / 100.0), -1.0, 1.0)
+            spans = word_spans_ipa(info, ph, ipa, piece.toks, code)
+            ws = [w for _, w in spans]
+            word_item += [piece.items[k] for k, _ in spans]
         else:
             doc = "<speak>" + "".join(piece.body) + "</speak>"
             raw = espeak.synth(doc, lang=code, voice=voice, rate=rate, pitch=pitch,
@@ -300,14 +390,15 @@ def speak(items: Sequence[Item], *, lang: str = "en", voice: str | None = None,
     plain = plain_text(items)
     sents, pos = [], 0
     for text, _ in split_sentences(plain, code):
-        n = len(tokens(text))
+        n = len(read_aloud(text, code)[1])
         ws = words[pos:pos + n]
         if ws:
             sents.append(Sentence(text, ws[0].start, ws[-1].end))
         pos += n
+    meta = {"source": "piper", "voice": info.name} if info is not None else \
+        {"source": "espeak-ng", "voice": voice or code, "pitch": pitch}
     return (Utterance(audio, sr, phones, words, sents, lang=code, text=plain,
-                      meta={"source": "espeak-ng", "ssml": True, "voice": voice or code,
-                            "rate": rate, "pitch": pitch}), positions)
+                      meta={**meta, "ssml": True, "rate": rate}), positions)
 
 
 def _positions(n_items: int, words: Sequence[Word], word_item: Sequence[int],
@@ -344,5 +435,5 @@ def plain_text(items: Sequence[Item]) -> str:
     return " ".join("".join(x[1] for x in items if x[0] == "text").split())
 
 
-__all__ = ["Item", "ipa_to_espeak", "items_from_speech", "parse", "plain_text",
-           "speak"]
+__all__ = ["Item", "ipa_to_espeak", "items_from_speech", "parse", "piper_segments",
+           "plain_text", "speak"]

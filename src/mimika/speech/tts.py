@@ -238,11 +238,8 @@ def synthesize(text: str, *, lang: str = "en", voice: str | None = None, rate: i
     if ssml:
         from mimika.speech.ssml import parse, speak
 
-        if kind == "piper":
-            log.info("SSML is spoken by espeak-ng; Piper voices read plain text")
-            voice = None if voice == info.name or (voice or "").endswith(".onnx") else voice
-        return speak(parse(text), lang=espeak.check_lang(lang), voice=voice, rate=rate,
-                     pitch=pitch, volume=volume)[0]
+        return speak(parse(text), lang=lang, voice=voice, rate=rate, pitch=pitch,
+                     volume=volume, engine=engine)[0]
     pieces = split_sentences(text, lang)
     if not pieces:
         raise ParameterError("text is empty; give at least one word to speak")
