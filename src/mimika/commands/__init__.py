@@ -3,5 +3,5 @@
 #: command modules in the order ``mimika --help`` lists them
 MODULES = (
     "catalogue", "characters", "pose", "knowledge", "speech", "timeline", "fit", "avatar",
-    "learn", "gan", "studio", "news", "batch",
+    "learn", "gan", "studio", "serve", "news", "batch",
 )

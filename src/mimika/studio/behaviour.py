@@ -21,12 +21,13 @@ JOIN_S = 0.3
 
 
 def behaviour_track(utterance: Any, *, fps: float, layers: Iterable[str], seed: int = 0,
-                    start: dict[str, float] | None = None) -> AUTrack | None:
+                    start: dict[str, float] | None = None, mood: str | None = None
+                    ) -> AUTrack | None:
     """The merged behaviour layers of ``utterance`` (None when no layer is on).
 
     ``seed`` varies the random streams (e.g. by sentence); ``start`` ({AU: value}, the last
     frame of the previous sentence) is faded into the first :data:`JOIN_S` seconds so
-    sentences join without a jump.
+    sentences join without a jump; ``mood`` changes how often and how strongly they act.
     """
     from mimika.behaviour import behaviour_params
     from mimika.behaviour.speaking import speaking_behaviour
@@ -34,7 +35,7 @@ def behaviour_track(utterance: Any, *, fps: float, layers: Iterable[str], seed: 
     names = [x for x in LAYERS if x in set(layers)]
     if not names:
         return None
-    track, _ = speaking_behaviour(utterance, fps=fps, layers=names,
+    track, _ = speaking_behaviour(utterance, fps=fps, layers=names, mood=mood,
                                   seed=behaviour_params()["seed"] + seed)
     if start:
         track = _join(track, start, fps)

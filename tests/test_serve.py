@@ -1,0 +1,220 @@
+"""mimika serve: the /ws API (speak, interrupt, emote, look, mood, errors), its guards, and
+the player page in Chromium."""
+
+import base64
+import json
+
+import pytest
+
+pytest.importorskip("fastapi")
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from mimika.errors import DataError
+
+WS = "ws://127.0.0.1:8787/ws"
+
+
+@pytest.fixture(scope="module")
+def app():
+    from mimika.serve.app import create_app
+
+    try:
+        return create_app(head="builtin")
+    except DataError as e:  # three.js not vendored: scripts/setup-studio.sh
+        pytest.skip(str(e))
+
+
+@pytest.fixture
+def client(app):
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        yield c
+
+
+def _until(ws, kind):
+    out = []
+    while True:
+        m = ws.receive_json()
+        out.append(m)
+        if m["type"] in (kind, "error"):
+            return out
+
+
+def test_speak_streams_frames_ahead_of_audio_covering_the_speech(client):
+    with client.websocket_connect(WS) as ws:
+        ready = ws.receive_json()
+        assert ready["type"] == "ready" and ready["fps"] == 30
+        ws.send_json({"type": "speak", "id": 7, "text": "Good evening. Bob bought a big map."})
+        msgs = _until(ws, "end")
+    kinds = [(m["type"], m.get("index")) for m in msgs]
+    assert kinds == [("frames", 0), ("audio", 0), ("sentence", 0),
+                     ("frames", 1), ("audio", 1), ("sentence", 1), ("end", None)]
+    assert all(m["id"] == 7 for m in msgs)
+    end = msgs[-1]
+    assert not end["interrupted"]
+    audio = [m for m in msgs if m["type"] == "audio"]
+    pcm = b"".join(base64.b64decode(m["data"]) for m in audio)
+    assert len(pcm) == 2 * sum(m["samples"] for m in audio)
+    assert sum(m["samples"] for m in audio) / audio[0]["sr"] == pytest.approx(end["duration"],
+                                                                              abs=1e-3)
+    frames = [f for m in msgs if m["type"] == "frames" for f in m["frames"]]
+    ts = [f["t"] for f in frames]
+    assert ts[0] == 0 and ts == sorted(ts) and ts[-1] >= end["duration"] - 2 / 30
+    assert audio[1]["t"] == pytest.approx(msgs[3]["t0"])
+    # the lips close for Bob / bought / big / map (the bilabial viseme), and open between
+    sent = msgs[5]
+    for w in sent["words"]:
+        inside = [f for f in frames if w["start"] <= f["t"] <= w["end"]]
+        if w["text"] in ("Bob", "bought", "big", "map"):
+            assert any(f.get("viseme") == "PP" for f in inside), w
+    assert max(f.get("jawOpen", 0) for f in frames) > 0.2
+    assert any("HeadYaw" in f for f in frames)  # the behaviour layers move the head
+
+
+def test_interrupt_stops_the_speech(client):
+    with client.websocket_connect(WS) as ws:
+        ws.receive_json()
+        text = " ".join(["This sentence goes on for a while."] * 8)
+        ws.send_json({"type": "speak", "id": 1, "text": text})
+        first = _until(ws, "audio")
+        assert first[-1]["type"] == "audio"
+        ws.send_json({"type": "interrupt"})
+        rest = _until(ws, "end")
+        assert rest[-1] == {"type": "end", "id": 1, "interrupted": True}
+        assert sum(m["type"] == "audio" for m in first + rest) < 8
+        ws.send_json({"type": "ping", "id": "p"})
+        assert ws.receive_json() == {"type": "pong", "id": "p"}
+
+
+def test_emote_look_and_mood_answer_with_relative_frames(client):
+    with client.websocket_connect(WS) as ws:
+        ws.receive_json()
+        ws.send_json({"type": "emote", "id": 1, "expression": "happiness", "intensity": 0.8,
+                      "duration": 1.0})
+        m = ws.receive_json()
+        assert m["type"] == "frames" and m["relative"] and len(m["frames"]) == 31
+        peak = max(f.get("AU12", 0) for f in m["frames"])
+        assert peak == pytest.approx(0.8, abs=0.01) and m["frames"][0].get("AU12", 0) == 0
+        assert max(f.get("mouthSmileLeft", 0) for f in m["frames"]) > 0.3
+        ws.send_json({"type": "look", "x": 1.0, "y": 0.0, "duration": 1.0})
+        m = ws.receive_json()
+        mid = m["frames"][15]
+        assert mid["AU62"] == pytest.approx(1.0) and mid["LeftEyeYaw"] != 0
+        ws.send_json({"type": "mood", "mood": "happy"})
+        m = ws.receive_json()
+        assert m["type"] == "mood" and m["face"]["AU12"] > 0
+        ws.send_json({"type": "speak", "id": 2, "text": "Hello there."})
+        msgs = _until(ws, "end")
+        frames = [f for x in msgs if x["type"] == "frames" for f in x["frames"]]
+        assert min(f.get("AU06", 0) for f in frames) > 0.1  # the happy face stays under speech
+
+
+@pytest.mark.parametrize(("msg", "says"), [
+    ("not json", "invalid JSON"),
+    ("[1, 2]", "JSON object"),
+    ('{"type": "sing"}', "unknown message type 'sing'"),
+    ('{"type": "speak", "id": 3}', "needs \"text\" or \"ssml\""),
+    ('{"type": "speak", "text": "hi", "rate": 1000}', "\"rate\" must be a number within 80…450"),
+    ('{"type": "speak", "text": "hi", "lang": "klingon"}', "unknown language 'klingon'"),
+    ('{"type": "emote", "expression": "glee"}', "glee"),
+    ('{"type": "emote", "aus": {"AU12": 3}}', "within 0…1"),
+    ('{"type": "mood", "mood": "grumpy"}', "grumpy"),
+    ('{"type": "look", "x": "left"}', "\"x\" must be a number"),
+])
+def test_every_bad_message_gets_one_error_and_the_connection_stays(client, msg, says):
+    with client.websocket_connect(WS) as ws:
+        ws.receive_json()
+        ws.send_text(msg)
+        m = ws.receive_json()
+        assert m["type"] == "error" and says in m["message"], m
+        if '"id": 3' in msg:
+            assert m["id"] == 3
+        ws.send_json({"type": "ping"})
+        assert ws.receive_json()["type"] == "pong"
+
+
+def test_message_size_is_bounded(app, client):
+    with client.websocket_connect(WS) as ws:
+        ws.receive_json()
+        ws.send_text(json.dumps({"type": "speak", "text": "a" * (app.state.max_body + 1)}))
+        m = ws.receive_json()
+        assert m["type"] == "error" and "at most" in m["message"]
+
+
+def test_foreign_host_and_missing_token_are_refused():
+    from mimika.serve.app import create_app
+
+    app = create_app(head="builtin", host="0.0.0.0", token="s3cret")
+    with TestClient(app, base_url="http://evil.attacker.test") as c:
+        assert c.get("/health").status_code == 403
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        assert c.get("/health").status_code == 401
+        assert c.get("/health?token=s3cret").status_code == 200
+        assert c.get("/health", headers={"Authorization": "Bearer s3cret"}).status_code == 200
+        with pytest.raises(WebSocketDisconnect), c.websocket_connect(WS) as ws:
+            ws.receive_json()
+        with c.websocket_connect(WS + "?token=s3cret") as ws:
+            assert ws.receive_json()["type"] == "ready"
+        page = c.get("/?token=s3cret")
+        assert page.status_code == 200 and "mimika_token" in page.headers["set-cookie"]
+
+
+def test_schema_describes_every_message(client):
+    schema = client.get("/protocol.json").json()
+    titles = " ".join(s["title"] for s in schema["oneOf"])
+    for kind in ("speak", "emote", "look", "mood", "interrupt", "frames", "audio", "end",
+                 "error"):
+        assert kind in titles
+
+
+def test_cli_refuses_a_bad_port(capsys):
+    from mimika.cli import main
+
+    assert main(["serve", "--port", "70000"]) == 2
+    assert "--port 70000" in capsys.readouterr().err
+
+
+# -- the player in a browser ------------------------------------------------------------------
+pytest_plugins = ["studio_pages"]  # the browser fixture (Chromium through Playwright)
+
+
+@pytest.fixture(scope="module")
+def served(app):
+    import socket
+    import threading
+    import time
+
+    import uvicorn
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
+    th = threading.Thread(target=srv.run, daemon=True)
+    th.start()
+    t0 = time.time()
+    while not srv.started and time.time() - t0 < 60:
+        time.sleep(0.05)
+    yield f"http://127.0.0.1:{port}/"
+    srv.should_exit = True
+    th.join(10)
+
+
+def test_the_player_page_speaks_and_moves_the_mouth(browser, served):
+    page = browser.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto(served)
+    page.wait_for_function("window.mimikaReady === true", timeout=120_000)
+    n_morphs = page.evaluate("window.mimikaHead.meshes.reduce((n, m) => n + "
+                             "Object.keys(m.morphTargetDictionary).length, 0)")
+    assert n_morphs > 20
+    page.evaluate("() => { window.spoken = false; window.mimikaHead.speak('Good evening. "
+                  "Here is the news.').then(() => { window.spoken = true; }); }")
+    page.wait_for_function("window.mimikaHead.stats.maxMouth > 0.15", timeout=60_000)
+    page.wait_for_function("window.spoken === true", timeout=60_000)  # played to its end
+    stats = page.evaluate("window.mimikaHead.stats")
+    assert stats["errors"] == [] and stats["frames"] > 10
+    assert errors == []
+    page.close()
