@@ -59,10 +59,49 @@ def speak(url: str, text: str) -> dict[str, float]:
                 return out
 
 
+def listen_latency(audio, sr: int, n_streams: int) -> tuple[float, float, float]:
+    """``n_streams`` listen streams fed in real time (50 ms chunks) at once: the median and
+    95th percentile of (frame received − its instant) in ms, and CPU s per s of audio."""
+    import numpy as np
+
+    from mimika.serve.listen import ListenStream
+
+    lat: list[float] = []
+    cpu: list[float] = []
+
+    def run() -> None:
+        st = ListenStream(sr)
+        step = int(0.05 * sr)
+        t_start = time.perf_counter()
+        c0 = time.thread_time()
+        for i, k in enumerate(range(0, len(audio), step)):
+            wait = t_start + (i + 1) * 0.05 - time.perf_counter()
+            if wait > 0:
+                time.sleep(wait)  # the chunk has been "recorded"
+            for f in st.feed(audio[k:k + step], final=k + step >= len(audio)):
+                lat.append((time.perf_counter() - t_start - f["t"]) * 1000)
+        cpu.append(time.thread_time() - c0)
+
+    ths = [threading.Thread(target=run) for _ in range(n_streams)]
+    for th in ths:
+        th.start()
+    for th in ths:
+        th.join()
+    return (float(np.median(lat)), float(np.percentile(lat, 95)),
+            sum(cpu) / (n_streams * len(audio) / sr))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--clients", type=int, default=8)
     args = ap.parse_args()
+    from mimika.speech.tts import synthesize
+
+    u = synthesize(LONG, engine="piper")
+    for n in (1, args.clients):
+        med, p95, cpu = listen_latency(u.audio, u.sr, n)
+        print(f"listen  {n} stream(s) in real time: frame latency median {med:.0f} ms, p95 "
+              f"{p95:.0f} ms (goal ≤ 150 ms); {cpu:.2f} s CPU per s of audio per stream")
     for engine in ("piper", "espeak"):
         os.environ["MIMIKA_TTS"] = engine
         srv, url = serve()

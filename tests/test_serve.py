@@ -4,6 +4,7 @@ the player page in Chromium."""
 import base64
 import json
 
+import numpy as np
 import pytest
 
 pytest.importorskip("fastapi")
@@ -162,7 +163,7 @@ def test_foreign_host_and_missing_token_are_refused():
 def test_schema_describes_every_message(client):
     schema = client.get("/protocol.json").json()
     titles = " ".join(s["title"] for s in schema["oneOf"])
-    for kind in ("speak", "emote", "look", "mood", "interrupt", "frames", "audio", "end",
+    for kind in ("speak", "listen", "emote", "look", "mood", "interrupt", "frames", "audio", "end",
                  "error"):
         assert kind in titles
 
@@ -218,3 +219,76 @@ def test_the_player_page_speaks_and_moves_the_mouth(browser, served):
     assert stats["errors"] == [] and stats["frames"] > 10
     assert errors == []
     page.close()
+
+
+def test_listen_streams_lipsync_from_audio_alone(client):
+    """The agent's own audio (a neural voice) in 50 ms chunks: frames cover it on its clock,
+    the lips close for most of Bob / bought / big / map / blue / pub, as offline."""
+    from mimika.speech import piper
+    from mimika.speech.coarticulation import bilabial_apex_times, closure_ok
+    from mimika.speech.tts import synthesize
+
+    if not piper.default_voice("en"):
+        pytest.skip("the Piper voice is not installed")
+    u = synthesize("Bob bought a big map, and a blue pub.", engine="piper", rate=140)
+    with client.websocket_connect(WS) as ws:
+        ws.receive_json()
+        pcm = (np.clip(u.audio, -1, 1) * 32767).astype("<i2").tobytes()
+        step = 2 * int(0.05 * u.sr)
+        for k in range(0, len(pcm), step):
+            ws.send_json({"type": "listen", "id": "mic", "sr": u.sr,
+                          "final": k + step >= len(pcm),
+                          "data": base64.b64encode(pcm[k:k + step]).decode()})
+        frames, end = [], None
+        while end is None:
+            m = ws.receive_json()
+            assert m["type"] != "error", m
+            if m["type"] == "frames":
+                frames += m["frames"]
+            else:
+                end = m
+    assert end == {"type": "end", "id": "mic", "duration": pytest.approx(u.duration, abs=1e-3),
+                   "interrupted": False}
+    ts = [f["t"] for f in frames]
+    assert ts[0] == 0 and np.allclose(np.diff(ts), 1 / 30, atol=2e-4)
+    assert ts[-1] >= u.duration - 2 / 30
+    assert max(f.get("AU26", 0) + f.get("AU25", 0) for f in frames) > 0.3
+    apex = bilabial_apex_times(u)
+    hit = sum(any(closure_ok(frames[j]) for j in range(max(0, round(t * 30) - 1),
+                                                      min(len(frames), round(t * 30) + 2)))
+              for t in apex)
+    assert len(apex) >= 6 and hit / len(apex) >= 0.5, (hit, len(apex))
+
+
+def test_listen_on_real_recordings_closes_the_lips_for_bilabials():
+    """GRID recordings streamed in 50 ms chunks: the lips close at the /p b m/ of the
+    aligned transcript about as often as offline audio-only lip-sync does."""
+    import os
+    from pathlib import Path
+
+    from mimika.serve.listen import ListenStream
+    from mimika.speech.alignment import align, recognise
+    from mimika.speech.audio import read_wav
+    from mimika.speech.coarticulation import bilabial_apex_times, closure_ok, mouth_track
+
+    d = Path(os.environ.get("MIMIKA_SPEECH_DIR", "/nonexistent"))
+    if not (d / "wav").is_dir():
+        pytest.skip("MIMIKA_SPEECH_DIR not set: no GRID recordings")
+    n = hit = off = 0
+    for p in sorted((d / "wav").glob("*.wav"))[:8]:
+        a, sr = read_wav(p)
+        words = [ln.split()[2] for ln in (d / "align" / f"{p.stem}.align").read_text()
+                 .splitlines() if ln.split()[2] not in ("sil", "sp")]
+        st = ListenStream(sr)
+        frames = []
+        step = int(0.05 * sr)
+        for k in range(0, len(a), step):
+            frames += st.feed(a[k:k + step], final=k + step >= len(a))
+        offline = mouth_track(recognise(a, sr=sr), fps=30)
+        for t in bilabial_apex_times(align(a, sr=sr, transcript=" ".join(words))):
+            n += 1
+            near = range(max(0, round(t * 30) - 1), min(len(frames), round(t * 30) + 2))
+            hit += any(closure_ok(frames[j]) for j in near)
+            off += any(closure_ok(dict(zip(offline.channels, offline.values[j], strict=True)))
+                       for j in near if j < offline.n_frames)
+    assert n >= 10 and hit / n >= 0.3 and hit >= off - 0.2 * n, (hit, off, n)

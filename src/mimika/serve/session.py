@@ -9,6 +9,7 @@ Client → server (JSON text messages; the schema is ``serve/data/protocol.json`
     {"type": "emote", "aus": {"AU12": 0.6}, "duration": 2}
     {"type": "look", "x": 0.3, "y": -0.1}          # -1 … 1: right / up of the viewer
     {"type": "mood", "mood": "happy"}
+    {"type": "listen", "id": "mic", "sr": 16000, "data": "<base64 s16le>", "final": false}
     {"type": "interrupt"}     {"type": "ping"}
 
 Server → client: ``ready`` on connect; for a ``speak``, sentence by sentence, ``frames``
@@ -17,8 +18,11 @@ Server → client: ``ready`` on connect; for a ``speak``, sentence by sentence, 
 ``sr``, ``samples``, ``data``: base64 of 16-bit little-endian mono PCM), then ``sentence``
 (text, words with times), and ``end`` (``interrupted`` true after an interrupt). ``emote``,
 ``look`` and ``mood`` answer with ``frames`` whose ``relative`` is true: ``t`` counts from when
-the client receives them, to be added on top of what plays. Every bad message is answered
-with ``error`` (``id`` when the message had one) and the connection stays open.
+the client receives them, to be added on top of what plays. A ``listen`` stream (the agent's
+own audio, any rate) is answered with ``frames`` on its own clock (0 = its first sample) as
+they become final (:mod:`mimika.serve.listen`), and ``end`` after ``final``. Every bad
+message is answered with ``error`` (``id`` when the message had one) and the connection stays
+open.
 
 Backpressure: a client's messages wait in a bounded queue (:data:`QUEUE`); when it is full,
 synthesis for that client waits, so a slow or vanished client costs no memory and never
@@ -28,6 +32,7 @@ stalls another client.
 from __future__ import annotations
 
 import asyncio
+import base64
 import contextlib
 import logging
 import time
@@ -44,7 +49,8 @@ log = logging.getLogger(__name__)
 
 QUEUE = 32  #: messages waiting for one client before its speech pauses
 MAX_EMOTE_S = 30.0
-KINDS = ("speak", "emote", "look", "mood", "interrupt", "ping")
+KINDS = ("speak", "listen", "emote", "look", "mood", "interrupt", "ping")
+MAX_STREAMS = 4  #: listen streams open at once per client
 
 
 class Session:
@@ -58,6 +64,7 @@ class Session:
         self.mood: str | None = None
         self.speech: asyncio.Task | None = None
         self.speech_id: Any = None
+        self.streams: dict[Any, Any] = {}  # listen id -> ListenStream
 
     # -- sending ------------------------------------------------------------------------------
     async def send(self, msg: dict[str, Any]) -> None:
@@ -115,6 +122,8 @@ class Session:
         try:
             if kind == "speak":
                 await self._speak(data)
+            elif kind == "listen":
+                await self._listen(data)
             elif kind == "interrupt":
                 await self._interrupt()
             elif kind == "emote":
@@ -208,6 +217,46 @@ class Session:
             await self.send({"type": "end", "id": sid, "interrupted": True})
         else:
             await self.send({"type": "end", "id": sid, "interrupted": False, "idle": True})
+
+    # -- listening ----------------------------------------------------------------------------
+    async def _listen(self, data: dict[str, Any]) -> None:
+        import numpy as np
+
+        from mimika.serve.listen import HOP, LOOKAHEAD, ListenStream
+
+        sid = data.get("id")
+        if not isinstance(sid, str | int):
+            raise ParameterError("listen needs an \"id\" naming its stream")
+        st = self.streams.get(sid)
+        if st is None:
+            if len(self.streams) >= MAX_STREAMS:
+                raise ParameterError(f"at most {MAX_STREAMS} listen streams at once; end one "
+                                     "with \"final\": true")
+            st = self.streams[sid] = ListenStream(
+                int(_num(data, "sr", 16000, 4000, 96000)), lang=_str(data, "lang", "en"),
+                hop=_num(data, "hop", HOP, 0.05, 1.0),
+                lookahead=_num(data, "lookahead", LOOKAHEAD, 0.0, 1.0))
+        raw = data.get("data", "")
+        try:
+            pcm = base64.b64decode(raw, validate=True) if raw else b""
+        except (ValueError, TypeError):
+            raise ParameterError("listen: \"data\" must be base64 of 16-bit PCM") from None
+        if len(pcm) % 2:
+            raise ParameterError("listen: \"data\" must hold whole 16-bit samples")
+        final = bool(data.get("final", False))
+        a = np.frombuffer(pcm, "<i2").astype(np.float32) / 32768.0
+        try:
+            out = await run_in_threadpool(st.feed, a, final=final)
+        except MimikaError:
+            self.streams.pop(sid, None)
+            raise
+        if out:
+            await self.send({"type": "frames", "id": sid, "relative": False,
+                             "t0": out[0]["t"], "fps": FPS, "frames": out})
+        if final:
+            self.streams.pop(sid, None)
+            await self.send({"type": "end", "id": sid, "duration": round(st.received, 4),
+                             "interrupted": False})
 
     # -- face ---------------------------------------------------------------------------------
     async def _emote(self, data: dict[str, Any]) -> None:

@@ -241,6 +241,12 @@ def recognise_phones(audio: np.ndarray, *, sr: int) -> list[Phone]:
         dec = _fresh(_decoder("phones"))
         _decode(dec, pcm)
         segs = [(s.word, s.start_frame, s.end_frame) for s in dec.seg()]
+    return seg_phones(segs, dur)
+
+
+def seg_phones(segs: list[tuple[str, int, int]], dur: float) -> list[Phone]:
+    """Phone-model segments ``(ARPAbet, first frame, last frame)`` as phones tiling
+    ``[0, dur]``."""
     phones: list[Phone] = []
     owner: list[int] = []
     for ph, f0, f1 in segs:
