@@ -324,7 +324,7 @@ def gen_spec(r: R) -> str:
 
 def run_spec(case: str) -> None:
     from mimika.batch.spec import SpecError, parse_spec
-    from mimika.batch.yamlload import read_yaml
+    from mimika.io.yamlsafe import read_yaml
 
     data, lines = read_yaml(case, "fuzz.yaml", error=SpecError)
     parse_spec(data, source="fuzz.yaml", lines=lines)

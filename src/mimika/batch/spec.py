@@ -132,17 +132,16 @@ class BatchSpec:
 # -- YAML with line numbers -------------------------------------------------------------------
 def _read_yaml(text: str, source: str) -> tuple[Any, dict[Path_, int]]:
     """Parse ``text`` into plain data plus the 1-based line of every key and list item
-    (safely: :mod:`mimika.batch.yamlload`)."""
-    from mimika.batch.yamlload import read_yaml
+    (safely: :mod:`mimika.io.yamlsafe`)."""
+    from mimika.io.yamlsafe import read_yaml
 
     return read_yaml(text, source, error=SpecError)
 
 
 def _where(path: Path_) -> str:
-    out = ""
-    for p in path:
-        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
-    return out or "spec"
+    from mimika.io.yamlsafe import where
+
+    return where(path) if path else "spec"
 
 
 class _Checker:

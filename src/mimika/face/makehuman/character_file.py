@@ -126,15 +126,11 @@ def _preset_text(name: str) -> str:
 
 
 def _parse(text: str, where: str) -> dict:
-    import yaml
+    """The file's mapping, read safely (:mod:`mimika.io.yamlsafe`: budgets on size, nesting,
+    aliases and integers; text keys only; every problem one line with its place)."""
+    from mimika.io.yamlsafe import read_yaml
 
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
-        loc = f":{mark.line + 1}:{mark.column + 1}" if mark else ""
-        raise DataError(f"{where}{loc}: not valid YAML/JSON ({getattr(e, 'problem', e)})"
-                        ) from None
+    doc, _ = read_yaml(text, where, text_keys=True)
     if not isinstance(doc, dict):
         raise DataError(f"{where}: a character file is a mapping of keys "
                         f"({', '.join(sorted(_KEYS))})")

@@ -1,4 +1,5 @@
-"""Safe YAML for batch specs: plain data plus the line of every key, within budgets.
+"""Safe YAML for batch specs and character files: plain data plus the line of every key,
+within budgets.
 
 PyYAML's ``SafeLoader`` (no Python objects), and on top of it what a hostile file could
 otherwise turn into minutes and gigabytes or a traceback: at most ``max_aliases`` aliases
@@ -6,7 +7,8 @@ and ``max_nodes`` values once aliases are expanded (no "billion laughs"), nestin
 ``max_depth`` (no ``RecursionError``), integers up to ``max_int`` (no 4300-digit
 ``ValueError``, no ``OverflowError`` later), no NaN or infinity, and every scalar a tag
 cannot construct (``!!int 1.0``, ``!!timestamp x``, ``!!foo``) reported at its line.
-Every problem is a :class:`~mimika.batch.spec.SpecError` with ``file:line``.
+Every problem is one :class:`~mimika.errors.DataError` (or the subclass the caller names)
+with ``file:line``.
 """
 
 from __future__ import annotations
@@ -78,16 +80,25 @@ def _flow_too_deep(text: str, max_depth: int) -> int:
     return 0
 
 
+def where(path: Path_) -> str:
+    """A key path as people write it: ``render.size[1]``."""
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "the document"
+
+
 def _error(error: type[DataError], source: str, line: int | None, msg: str) -> DataError:
     return error(f"{source}:{line}: {msg}" if line else f"{source}: {msg}")
 
 
-def read_yaml(text: str, source: str, *, error: type[DataError] = DataError
-              ) -> tuple[Any, dict[Path_, int]]:
+def read_yaml(text: str, source: str, *, error: type[DataError] = DataError,
+              text_keys: bool = False) -> tuple[Any, dict[Path_, int]]:
     """Parse ``text`` into plain data and the 1-based line of every key path and list item.
 
     ``error`` is the exception class raised (a :class:`DataError`), always as
-    ``source:line: message``.
+    ``source:line: message``; ``text_keys`` refuses keys that are not text (else integers
+    are keys too).
     """
     try:
         import yaml
@@ -96,13 +107,13 @@ def read_yaml(text: str, source: str, *, error: type[DataError] = DataError
                     "pip install 'mimika[batch]'") from None
     lim = limits.current()
     try:
-        limits.check_text(text, f"spec {source}")
+        limits.check_text(text, source)
     except limits.LimitError as e:
         raise error(f"{source}: {e}") from None
     deep_line = _flow_too_deep(text, lim.max_depth)
     if deep_line:  # PyYAML's scanner is quadratic in the depth of [ and { nesting
         raise _error(error, source, deep_line, str(limits.over(
-            "max_depth", f"the spec is nested more than {lim.max_depth} levels deep", lim)))
+            "max_depth", f"the file is nested more than {lim.max_depth} levels deep", lim)))
     lines: dict[Path_, int] = {}
     try:
         loader = _loader_class(yaml, lim)(text)
@@ -123,7 +134,9 @@ def read_yaml(text: str, source: str, *, error: type[DataError] = DataError
         if root is None:
             return None, lines
         _check_expansion(yaml, root, source, lim, error)
-        return _Converter(yaml, loader, source, lines, lim, error).conv(root, ()), lines
+        conv = _Converter(yaml, loader, source, lines, lim, error)
+        conv.key_types = (str,) if text_keys else (str, int)
+        return conv.conv(root, ()), lines
     finally:
         loader.dispose()
 
@@ -165,12 +178,11 @@ class _Converter:
                  lim: limits.Limits, error: type[DataError]):
         self.yaml, self.loader, self.source, self.lines = yaml, loader, source, lines
         self.lim, self.error, self.nodes = lim, error, 0
+        self.key_types: tuple[type, ...] = (str, int)
 
     def fail(self, node: Any, path: Path_, msg: str) -> DataError:
-        from mimika.batch.spec import _where
-
         return _error(self.error, self.source, node.start_mark.line + 1,
-                      f"{_where(path)}: {msg}" if path else msg)
+                      f"{where(path)}: {msg}" if path else msg)
 
     def scalar(self, node: Any, path: Path_) -> Any:
         value = node.value if isinstance(node.value, str) else ""
@@ -196,18 +208,18 @@ class _Converter:
         self.nodes += 1
         if self.nodes > self.lim.max_nodes:
             raise self.fail(node, path, str(limits.over(
-                "max_nodes", f"the spec (with its aliases expanded) has over "
+                "max_nodes", f"the file (with its aliases expanded) has over "
                              f"{self.lim.max_nodes} values", self.lim)))
         if len(path) > self.lim.max_depth:  # an alias inside itself nests forever
             raise self.fail(node, path[:3], str(limits.over(
-                "max_depth", "the spec (with its aliases expanded) is nested more than "
+                "max_depth", "the file (with its aliases expanded) is nested more than "
                              f"{self.lim.max_depth} levels deep", self.lim)))
         self.lines.setdefault(path, node.start_mark.line + 1)
         if isinstance(node, yaml.MappingNode):
             out: dict[Any, Any] = {}
             for k, v in node.value:
                 key = self.scalar(k, path) if isinstance(k, yaml.ScalarNode) else None
-                if not isinstance(key, str | int):
+                if not isinstance(key, self.key_types) or isinstance(key, bool):
                     raise self.fail(k, path, f"keys must be text, not {key!r}")
                 if key in out:
                     raise self.fail(k, (*path, key), "is given twice")
