@@ -1,5 +1,5 @@
 """The release fuzz run (issue 20): ≥ 100 000 cases over script, project, batch spec,
-expression library and every CSV reader; goal 0 crashes and 0 hangs.
+expression library, every CSV reader and character files; goal 0 crashes and 0 hangs.
 
 The cases are those of ``tests/fuzzing.py`` (which CI samples through hypothesis), made from
 seeds 0, 1, 2, … so that any failure is reproduced by its target and seed.

@@ -499,12 +499,56 @@ def time_limit(seconds: float = HANG_SECONDS):
 
 
 #: name → (generator of one case from a Random, run)
+# -- character files -----------------------------------------------------------------------------
+_CHAR_VALUES = ["0.5", "34", "-1", "1e999", ".nan", "!!int", "!!int 1.0", "!!float x", "true",
+                "null", "[]", "{}", "'#zzzzzz'", "\"#74492f\"", "{african: 0.9, asian: 0}",
+                "{african: 0}", "{martian: 1}", "{1: 2}", "[afro01]", "{style: nope}", "*undefined",
+                "&a [*a]", "9" * 400, "1" + "0" * 5000, "~", "'" + "x" * 300 + "'"]
+
+
+def gen_character(r: R) -> str:
+    from mimika.face.makehuman.character_file import _preset_text, preset_names
+
+    mutating(r)
+    lines = _preset_text(r.choice(preset_names())).splitlines()
+    for _ in range(r.randint(1, 4)):
+        i = r.randrange(len(lines))
+        key, sep, _ = lines[i].partition(":")
+        k = r.random()
+        if k < 0.5 and sep:
+            lines[i] = f"{key}: {r.choice(_CHAR_VALUES)}"
+        elif k < 0.65:
+            lines.insert(i, r.choice(YAML_SNIPPETS))
+        elif k < 0.75:
+            lines[i] = f"{key}: " + deep(r.choice([10, 70, 3000]))
+        elif k < 0.85:
+            lines.insert(i, f"{r.choice(['1', 'true', '[a]', '~', text(r, 5)])}: 1")
+        elif k < 0.9:
+            lines[i] += chr(r.randint(0, 31))
+        else:
+            del lines[i]
+        if not lines:
+            break
+    if r.random() < 0.05:
+        rows = ["l0: &l0 [x, x, x, x, x, x, x, x, x]"]
+        rows += [f"l{j}: &l{j} [" + ", ".join([f"*l{j - 1}"] * 9) + "]" for j in range(1, 9)]
+        lines.append("description:\n  " + "\n  ".join(rows))
+    return "\n".join(lines)
+
+
+def run_character(case: str) -> None:
+    from mimika.face.makehuman.character_file import _parse, character_from_dict
+
+    character_from_dict(_parse(case, "fuzz.yaml"), "fuzz.yaml", "fuzz")
+
+
 TARGETS: dict[str, tuple[Callable[[R], Any], Callable[[Any], None]]] = {
     "script": (gen_script, run_script),
     "project": (gen_project, run_project),
     "batch spec": (gen_spec, run_spec),
     "library": (gen_library, run_library),
     "csv": (gen_csv, run_csv),
+    "character": (gen_character, run_character),
 }
 
 
