@@ -10,8 +10,8 @@
 //
 // The avatar is any glTF/GLB/VRM three.js loads (`avatar: URL`, default the server's
 // /head.glb): morph targets named like AUs (mimika's exports: AU12, AU12L …) or ARKit
-// (jawOpen, mouthSmileLeft … : Ready Player Me, VRoid via ARKit names) are driven from the
-// frames; a bone named like Head/head/neck turns with HeadYaw/HeadPitch/HeadRoll, eye bones
+// (jawOpen, mouthSmileLeft … : Ready Player Me, TalkingHead's avatars) are driven from the
+// frames, VRoid's vowel and blink morphs (Fcl_MTH_A …, Fcl_EYE_Close) from the visemes; a bone named like Head/head/neck turns with HeadYaw/HeadPitch/HeadRoll, eye bones
 // (LeftEye/RightEye, eye_L/eye_R …) with the eye rotations. Audio plays through Web Audio; its
 // clock is the master: a frame with t is shown when the speech has played t seconds.
 
@@ -22,6 +22,9 @@ const HEAD_BONES = /^(head|Head|mixamorigHead|J_Bip_C_Head)$/;
 const EYE_BONES = { left: /^(LeftEye|eye_L|Eye_L|J_Adj_L_FaceEye|mixamorigLeftEye)$/,
                     right: /^(RightEye|eye_R|Eye_R|J_Adj_R_FaceEye|mixamorigRightEye)$/ };
 const FADE_S = 0.12; // interrupt: back to idle within this
+// VRoid/VRM faces name their morphs after vowels and blinks: drive them from the viseme
+const VRM_VOWEL = { aa: "Fcl_MTH_A", E: "Fcl_MTH_E", ih: "Fcl_MTH_I", oh: "Fcl_MTH_O",
+                    ou: "Fcl_MTH_U", CH: "Fcl_MTH_I", SS: "Fcl_MTH_I", RR: "Fcl_MTH_O" };
 
 export class MimikaHead {
   constructor(container, { server, avatar = "head.glb", background = 0x20242c } = {}) {
@@ -241,6 +244,9 @@ export class MimikaHead {
 
   _apply(w) {
     this.weights = w;
+    const vowel = VRM_VOWEL[w.viseme];
+    if (vowel) w = { ...w, [vowel]: Math.min(1, 0.3 + (w.jawOpen || 0) * 1.5) };
+    if (w.eyeBlinkLeft || w.AU45) w = { ...w, Fcl_EYE_Close: Math.max(w.eyeBlinkLeft || 0, w.AU45 || 0) };
     let mouth = 0;
     for (const m of this.meshes) {
       const inf = m.morphTargetInfluences, dict = m.morphTargetDictionary;
