@@ -1,7 +1,7 @@
 """Fuzzing the readers (issue 20): script, project, batch spec, expression library, every
-CSV reader and character files get random and hostile input; each returns or raises a MimikaError, within
-``fuzzing.HANG_SECONDS``. This is the CI share (``FUZZ_EXAMPLES`` cases per reader); the
-release run is ``make fuzz`` (bench/fuzz.py, ≥ 100 000 cases)."""
+CSV reader and character files get random and hostile input; each returns or raises a
+MimikaError, within ``fuzzing.HANG_SECONDS``. This is the CI share (``FUZZ_EXAMPLES`` cases
+per reader); the release run is ``make fuzz`` (bench/fuzz.py, ≥ 100 000 cases)."""
 
 from __future__ import annotations
 
