@@ -6,6 +6,8 @@ import argparse
 import sys
 from collections.abc import Callable
 
+from mimika.errors import ParameterError
+
 
 def size_arg(text: str) -> tuple[int, int]:
     """``"640x480"`` → ``(640, 480)`` (an argparse type)."""
@@ -84,3 +86,19 @@ def add_voice_args(parser: argparse.ArgumentParser) -> None:
                         help="speech engine: auto (default, or $MIMIKA_TTS) speaks with a "
                              "neural Piper voice where one speaks the language, else "
                              "espeak-ng")
+
+
+#: addresses only this computer reaches
+LOOPBACK = ("127.0.0.1", "localhost", "::1")
+
+
+def check_web_server(name: str, port: int) -> None:
+    """FastAPI and uvicorn are installed and ``port`` is a TCP port, else one clear error."""
+    try:
+        import fastapi  # noqa: F401
+        import uvicorn  # noqa: F401
+    except ImportError:
+        raise ParameterError(f"mimika {name} needs FastAPI and uvicorn: "
+                             "pip install 'mimika[studio]'") from None
+    if not 1 <= port <= 65535:
+        raise ParameterError(f"--port {port} must be within 1…65535")

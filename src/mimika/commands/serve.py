@@ -6,23 +6,15 @@ import argparse
 import secrets
 import sys
 
-from mimika.commands._util import limit_options
-from mimika.errors import ParameterError
-
-LOOPBACK = ("127.0.0.1", "localhost", "::1")
+from mimika.commands._util import LOOPBACK, check_web_server, limit_options
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
-    try:
-        import fastapi  # noqa: F401
-        import uvicorn
-    except ImportError:
-        raise ParameterError("mimika serve needs FastAPI and uvicorn: "
-                             "pip install 'mimika[studio]'") from None
+    check_web_server("serve", args.port)
+    import uvicorn
+
     from mimika.serve.app import create_app
 
-    if not 1 <= args.port <= 65535:
-        raise ParameterError(f"--port {args.port} must be within 1…65535")
     token = args.token
     if token is None and args.host not in LOOPBACK:
         token = secrets.token_urlsafe(18)  # reachable from elsewhere: never without a token

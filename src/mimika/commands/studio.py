@@ -6,11 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from mimika.commands._util import limit_options
-from mimika.errors import ParameterError
+from mimika.commands._util import LOOPBACK, check_web_server, limit_options
 from mimika.face.heads import DEFAULT_HEAD
-
-LOOPBACK = ("127.0.0.1", "localhost", "::1")
 
 
 def default_projects_dir() -> Path:
@@ -20,17 +17,12 @@ def default_projects_dir() -> Path:
 
 
 def cmd_studio(args: argparse.Namespace) -> int:
-    try:
-        import fastapi  # noqa: F401
-        import uvicorn
-    except ImportError:
-        raise ParameterError("mimika studio needs FastAPI and uvicorn: "
-                             "pip install 'mimika[studio]'") from None
+    check_web_server("studio", args.port)
+    import uvicorn
+
     from mimika.studio.app import create_app
     from mimika.studio.assets import ensure_vendor
 
-    if not 1 <= args.port <= 65535:
-        raise ParameterError(f"--port {args.port} must be within 1…65535")
     ensure_vendor()
     projects = Path(args.projects) if args.projects else default_projects_dir()
     app = create_app(projects, head=args.head, library_path=args.library, warm_up=True,

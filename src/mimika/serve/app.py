@@ -43,15 +43,11 @@ class TokenGuard:
 
     async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
         if self.token and scope["type"] in ("http", "websocket") and not self._ok(scope):
-            if scope["type"] == "websocket":
-                await send({"type": "websocket.close", "code": 1008})
-                return
-            body = b'{"error": "this mimika serve needs its token: open the address it printed ' \
-                   b'(with ?token=...) or send Authorization: Bearer TOKEN"}'
-            await send({"type": "http.response.start", "status": 401,
-                        "headers": [(b"content-type", b"application/json"),
-                                    (b"content-length", str(len(body)).encode())]})
-            await send({"type": "http.response.body", "body": body})
+            from mimika.studio.guard import refuse
+
+            await refuse(scope, send, 401, "this mimika serve needs its token: open the "
+                                           "address it printed (with ?token=...) or send "
+                                           "Authorization: Bearer TOKEN")
             return
         await self.app(scope, receive, send)
 

@@ -83,7 +83,6 @@ def available() -> bool:
 def read_info(model: str | os.PathLike, *, source: str = "path") -> VoiceInfo:
     """The :class:`VoiceInfo` of ``model`` (``.onnx``; its config next to it), or one
     ``ParameterError`` saying what is missing."""
-    from mimika.limits import loads_json
 
     m = Path(model).expanduser()
     cfg = m.with_name(m.name + ".json")
@@ -94,8 +93,17 @@ def read_info(model: str | os.PathLike, *, source: str = "path") -> VoiceInfo:
     if not cfg.is_file():
         raise ParameterError(f"Piper voice {str(m)!r} has no config {cfg.name!r} beside it; "
                              "download both files of the voice")
-    if cfg.stat().st_size > MAX_CONFIG_BYTES:
-        raise DataError(f"{cfg}: {cfg.stat().st_size} bytes is too large for a Piper config")
+    st = cfg.stat()
+    if st.st_size > MAX_CONFIG_BYTES:
+        raise DataError(f"{cfg}: {st.st_size} bytes is too large for a Piper config")
+    return _info(m, cfg, st.st_mtime_ns, st.st_size, source)
+
+
+@functools.lru_cache(maxsize=256)
+def _info(m: Path, cfg: Path, _mtime: int, _size: int, source: str) -> VoiceInfo:
+    """The parsed config (cached per file version: every sentence asks which voice speaks)."""
+    from mimika.limits import loads_json
+
     try:
         d = loads_json(cfg.read_bytes(), str(cfg))
         espeak_voice = str(d.get("espeak", {}).get("voice", ""))

@@ -108,16 +108,22 @@ class HostGuard:
             host = next((v.decode("latin-1") for k, v in scope.get("headers", [])
                          if k == b"host"), None)
             if not self.policy.allows(host):
-                if scope["type"] == "websocket":
-                    await send({"type": "websocket.close", "code": 1008})
-                    return
                 where = self.policy.bind if not self.policy.any_ip else "its address"
-                body = json.dumps({"error": f"host {host!r} is not served here; open the "
-                                            f"studio at {where} or allow the name with "
-                                            "mimika studio --allow-host"}).encode()
-                await send({"type": "http.response.start", "status": 403,
-                            "headers": [(b"content-type", b"application/json"),
-                                        (b"content-length", str(len(body)).encode())]})
-                await send({"type": "http.response.body", "body": body})
+                await refuse(scope, send, 403, f"host {host!r} is not served here; open the "
+                                               f"studio at {where} or allow the name with "
+                                               "mimika studio --allow-host")
                 return
         await self.app(scope, receive, send)
+
+
+async def refuse(scope: dict, send: Any, status: int, message: str) -> None:
+    """Answer a refused request: a closed handshake (1008) for a WebSocket, else ``status``
+    with ``{"error": message}``."""
+    if scope["type"] == "websocket":
+        await send({"type": "websocket.close", "code": 1008})
+        return
+    body = json.dumps({"error": message}).encode()
+    await send({"type": "http.response.start", "status": status,
+                "headers": [(b"content-type", b"application/json"),
+                            (b"content-length", str(len(body)).encode())]})
+    await send({"type": "http.response.body", "body": body})
