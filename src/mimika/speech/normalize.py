@@ -468,6 +468,20 @@ def no_break_after(text: str, pos: int, lang: str) -> bool:
         return False
     if 0 < pos < len(text) - 1 and text[pos - 1].isdigit() and text[pos + 1].isdigit():
         return True
+    # only the words around the '.' decide: look at them alone (a long article has thousands)
+    lo = text.rfind(" ", 0, max(pos - _CONTEXT, 0)) + 1
+    hi = text.find(" ", min(pos + _CONTEXT, len(text)))
+    more = _NON_SPACE.search(text, hi) is not None if hi >= 0 else False
+    return _no_break_after(text[lo:hi if hi >= 0 else len(text)], pos - lo, lang, more)
+
+
+#: characters either side of a '.' that :func:`no_break_after` looks at (whole words)
+_CONTEXT = 80
+_NON_SPACE = re.compile(r"\S")
+
+
+def _no_break_after(text: str, pos: int, lang: str, more: bool) -> bool:
+    """:func:`no_break_after` on the words around the '.'; ``more``: text follows them."""
     table = _lang_table(lang)
     if table is not None:
         for a in _abbreviations(text, table):
@@ -476,7 +490,7 @@ def no_break_after(text: str, pos: int, lang: str) -> bool:
                 return not (a.entry.get("final") and is_last and _starts_sentence(text, a.end))
         for o in _de_ordinals(text, table):
             if o.dot == pos:
-                return bool(text[pos + 1:].strip())
+                return more or bool(text[pos + 1:].strip())
     return bool(re.search(r"(?<![\w.])[^\W\d_]$", text[:pos])) and text[pos - 1].isupper()
 
 
