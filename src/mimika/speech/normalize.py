@@ -471,8 +471,9 @@ def no_break_after(text: str, pos: int, lang: str) -> bool:
     # only the words around the '.' decide: look at them alone (a long article has thousands)
     lo = text.rfind(" ", 0, max(pos - _CONTEXT, 0)) + 1
     hi = text.find(" ", min(pos + _CONTEXT, len(text)))
-    more = _NON_SPACE.search(text, hi) is not None if hi >= 0 else False
-    return _no_break_after(text[lo:hi if hi >= 0 else len(text)], pos - lo, lang, more)
+    hi = len(text) if hi < 0 else hi
+    more = _NON_SPACE.search(text, hi) is not None
+    return _no_break_after(text[lo:hi], pos - lo, lang, more)
 
 
 #: characters either side of a '.' that :func:`no_break_after` looks at (whole words)
