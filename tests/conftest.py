@@ -94,13 +94,12 @@ def serve_app(app):
     import threading
     import time
 
-    import uvicorn
+    from mimika.studio.server import server
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    srv = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning",
-                                        ws_max_size=getattr(app.state, "max_body", 2 ** 21)))
+    srv = server(app, "127.0.0.1", port, quiet=True)
     th = threading.Thread(target=srv.run, daemon=True)
     th.start()
     t0 = time.time()

@@ -43,7 +43,12 @@ def _wait(cond, within: float, what: str) -> None:
         time.sleep(0.1)
 
 
-def _render_then(sig: int, tmp_path: Path) -> tuple[subprocess.Popen, Path]:
+def _semaphores() -> set[str]:
+    """multiprocessing's named semaphores (the pool's queues and locks) in /dev/shm."""
+    return set(glob.glob("/dev/shm/sem.mp-*"))
+
+
+def _render_then(sig: int, tmp_path: Path, group: bool = False) -> tuple[subprocess.Popen, Path]:
     from mimika.render.context import egl_available
 
     if not egl_available():
@@ -61,7 +66,8 @@ def _render_then(sig: int, tmp_path: Path) -> tuple[subprocess.Popen, Path]:
           or p.poll() is not None, 240, "the render did not start")
     assert p.poll() is None, p.stderr.read()
     time.sleep(1.0)
-    os.kill(p.pid, sig)
+    p.semaphores = _semaphores()  # type: ignore[attr-defined]
+    (os.killpg if group else os.kill)(p.pid, sig)
     p.wait(60)
     return p, out
 
@@ -72,6 +78,7 @@ def test_sigterm_stops_workers_and_removes_the_temporary_video(tmp_path):
     assert "stopped by signal 15" in p.stderr.read()
     _wait(lambda: not _session(p.pid), 10, f"left running: {_session(p.pid)}")
     assert not list(tmp_path.glob(".news.mp4.*")) and not out.exists()
+    assert not p.semaphores & _semaphores()  # released: none left in /dev/shm
 
 
 def test_sigkill_orphans_exit_and_the_next_start_sweeps_the_temporary_video(tmp_path):
@@ -84,3 +91,17 @@ def test_sigkill_orphans_exit_and_the_next_start_sweeps_the_temporary_video(tmp_
 
     VideoWriter(out, fps=25, size=(32, 32), threaded=False).abort()  # … the next start does
     assert not any(p.exists() for p in left) and not out.exists()
+    # the pool's semaphores: its resource tracker outlives the command and releases them
+    _wait(lambda: not p.semaphores & _semaphores(), 10, "semaphores left in /dev/shm")
+
+
+def test_a_process_group_killed_outright_leaves_semaphores_that_the_next_render_sweeps(tmp_path):
+    from mimika.render.parallel import sweep_semaphores
+
+    p, _ = _render_then(signal.SIGKILL, tmp_path, group=True)
+    _wait(lambda: not _session(p.pid), 10, f"left running: {_session(p.pid)}")
+    leaked = p.semaphores & _semaphores()
+    if not leaked:
+        pytest.skip("this Python released the semaphores itself")
+    assert sweep_semaphores() >= len(leaked)  # what a render with workers runs first
+    assert not leaked & _semaphores()

@@ -118,6 +118,39 @@ def test_oversize_bodies_get_413(http):
     assert "limit" in error_of(r, 413)
 
 
+def _upload(header: bytes, pcm: bytes = b"\0\0" * 16000) -> bytes:
+    import struct
+
+    return struct.pack("<I", len(header)) + header + pcm
+
+
+@pytest.mark.parametrize("header", [
+    b'{"text": "Hi.", "sr": 16000, "x": ' + b"[" * 30000 + b"]" * 30000 + b"}",
+    b'{"text": "Hi.", "sr": 1' + b"0" * 400 + b"}",
+    b'{"text": "Hi.", "sr": 16000.5}',
+    b'{"text": "Hi.", "sr": NaN}',
+    b'{"text": "Hi.", "sr": 16000, "project": {"format": "nope"}}',
+    b'{"text": "Hi.", "sr": 16000, "lang": "xx-nowhere"}',
+    b'\xff\xfe',
+])
+def test_hostile_recording_uploads_are_a_4xx_never_a_500(http, header):
+    r = http.post("/api/speech/align", content=_upload(header))
+    assert 400 <= r.status_code < 500, (r.status_code, r.text[:200])
+    assert "internal error" not in r.json()["error"]
+
+
+def test_an_oversize_chunked_upload_gets_413_and_leaves_no_traceback(http, caplog):
+    def chunks():
+        for _ in range(40):
+            yield b"x" * 100_000
+
+    with caplog.at_level("DEBUG"):
+        r = http.post("/api/speech/align", content=chunks())
+        time.sleep(0.5)  # the endpoint sees the disconnect after the answer went out
+    assert "limit" in error_of(r, 413)
+    assert not [rec for rec in caplog.records if rec.exc_info], caplog.text[-2000:]
+
+
 @pytest.mark.parametrize("raw", [
     '{"format": "mimika-project", "version": 1, "settings": {"fps": 1' + "0" * 400 + "}}",
     '{"format": "mimika-project", "version": 1, "settings": {"fps": 1' + "0" * 5000 + "}}",
@@ -250,6 +283,7 @@ BAD_MESSAGES = [
     ("bad project: not one", json.dumps({"type": "speak", "id": 7, "text": "Hi.",
                                          "project": {"format": "nope"}})),
     ("oversize", "x" * (3 * 1024 * 1024)),
+    ("oversize in fragments", ["x" * 4000] * 1000),
 ]
 
 
@@ -260,13 +294,13 @@ def test_bad_websocket_messages_get_an_error_and_the_socket_stays_usable(server,
                                       max_size=None) as ws:
             await ws.send(message)
             reply = json.loads(await asyncio.wait_for(ws.recv(), 30))
-            if what == "oversize":  # the server closes over-limit frames (1009)
+            if what.startswith("oversize"):  # the server closes over-limit messages (1009)
                 return reply
             await ws.send('{"type": "ping"}')
             pong = json.loads(await asyncio.wait_for(ws.recv(), 30))
             return reply, pong
 
-    if what == "oversize":
+    if what.startswith("oversize"):
         with pytest.raises(websockets.exceptions.ConnectionClosed) as e:
             asyncio.run(go())
         assert e.value.rcvd is not None and e.value.rcvd.code == 1009

@@ -11,9 +11,8 @@ from mimika.commands._util import LOOPBACK, check_web_server, limit_options
 
 def cmd_serve(args: argparse.Namespace) -> int:
     check_web_server("serve", args.port)
-    import uvicorn
-
     from mimika.serve.app import create_app
+    from mimika.studio.server import server
 
     token = args.token
     if token is None and args.host not in LOOPBACK:
@@ -24,8 +23,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     url = f"http://{host}:{args.port}/" + (f"?token={token}" if token else "")
     print(f"mimika serve on {url} (WebSocket at ws://{host}:{args.port}/ws"
           f"{'?token=…' if token else ''}); Ctrl-C stops it", file=sys.stderr)
-    uvicorn.run(app, host=args.host, port=args.port,
-                log_level="warning" if args.quiet else "info", ws_max_size=app.state.max_body)
+    server(app, args.host, args.port, quiet=args.quiet).run()
     return 0
 
 

@@ -18,10 +18,9 @@ def default_projects_dir() -> Path:
 
 def cmd_studio(args: argparse.Namespace) -> int:
     check_web_server("studio", args.port)
-    import uvicorn
-
     from mimika.studio.app import create_app
     from mimika.studio.assets import ensure_vendor
+    from mimika.studio.server import server
 
     ensure_vendor()
     projects = Path(args.projects) if args.projects else default_projects_dir()
@@ -38,8 +37,7 @@ def cmd_studio(args: argparse.Namespace) -> int:
         import webbrowser
 
         threading.Timer(1.0, webbrowser.open, args=(url,)).start()
-    uvicorn.run(app, host=host, port=args.port, log_level="warning" if args.quiet else "info",
-                ws_max_size=app.state.max_body)
+    server(app, host, args.port, quiet=args.quiet).run()
     return 0
 
 

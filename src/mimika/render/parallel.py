@@ -89,6 +89,35 @@ def _stop(pool: Any) -> None:
                 p.kill()
 
 
+def _owned(path: str) -> bool:
+    try:
+        return os.stat(path).st_uid == os.getuid()
+    except OSError:
+        return False
+
+
+def sweep_semaphores(shm: str = "/dev/shm") -> int:
+    """Remove multiprocessing's named semaphores (``sem.mp-*``) of this user that no process
+    has open: those of pools killed outright with their whole process group, which nobody is
+    left to release. Returns how many were removed."""
+    import glob
+
+    left = [p for p in glob.glob(os.path.join(shm, "sem.mp-*")) if _owned(p)]
+    if not left:
+        return 0
+    in_use: set[str] = set()
+    for maps in glob.glob("/proc/[0-9]*/maps"):
+        with contextlib.suppress(OSError), open(maps) as f:
+            in_use.update(line.split(None, 5)[-1].strip() for line in f if "/sem.mp-" in line)
+    removed = 0
+    for p in left:
+        if p not in in_use:
+            with contextlib.suppress(OSError):
+                os.unlink(p)
+                removed += 1
+    return removed
+
+
 def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camera: Any,
                  size: tuple[int, int], samples: int = 0, skin: Any = False,
                  lighting: Any = None, chunk: int = 50, workers: int = 1,
@@ -117,6 +146,7 @@ def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camer
     # (cheaper than handing every tile to a single helper thread)
     lp = (os.cpu_count() or 1) // workers
     lp = 0 if lp <= 1 else lp
+    sweep_semaphores()
     with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_init,
                              initargs=(rig, list(channels), size, samples, skin, lighting,
                                        lp, tuple(hidden), os.getpid())) as pool:

@@ -9,12 +9,12 @@ a JSON header ``{"text", "lang", "sr", "project", "blend"}``, then mono int16 LE
 from __future__ import annotations
 
 import hashlib
-import json
 import struct
 from typing import Any
 
 import numpy as np
 
+from mimika import limits
 from mimika.errors import ParameterError
 from mimika.studio.state import SpeechEntry, SpeechSegment, StudioState
 
@@ -28,8 +28,8 @@ def parse_upload(body: bytes) -> tuple[dict[str, Any], np.ndarray]:
     if n > len(body) - 4 or n > 64 * 1024:
         raise bad
     try:
-        head = json.loads(body[4:4 + n].decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
+        head = limits.loads_json(body[4:4 + n].decode("utf-8"), "the upload's header")
+    except UnicodeDecodeError:
         raise bad from None
     pcm = body[4 + n:]
     if not isinstance(head, dict) or len(pcm) % 2:
