@@ -180,6 +180,31 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, skin_w: sp.csr_matrix,
     return moved
 
 
+def lift_layers(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray) -> int:
+    """Lift the cloth islands that cross others clear of them, in place, as seen in the rest
+    pose (:func:`.layers.layer_offsets`); the moves are carried back to bind space through
+    each vertex's blended rotation. Returns how many positions moved."""
+    from mimika.face.makehuman.layers import layer_offsets, welded
+    from mimika.face.makehuman.paint.regions import uv_islands
+
+    tris = np.concatenate(list(cloth.parts.values()))
+    islands = uv_islands(tris, len(cloth.vertices))[tris[:, 0]]
+    posed = skin(cloth.vertices.astype(np.float64), weights, pose)
+    pos, wtris, inv = welded(posed, tris)
+    move = layer_offsets(pos, wtris, islands)
+    moved = np.flatnonzero(np.abs(move).max(1) > 0)
+    if not len(moved):
+        return 0
+    rot = (weights @ pose[:, :, :3].reshape(len(pose), 9)).reshape(-1, 3, 3)
+    step = move[inv]
+    sel = np.flatnonzero(np.abs(step).max(1) > 0)
+    bind = cloth.vertices.astype(np.float64)
+    bind[sel] += np.linalg.solve(rot[sel], step[sel][:, :, None])[:, :, 0]
+    cloth.vertices = bind.astype(np.float32)
+    log.debug("%s: %d positions lifted clear of other layers", cloth.name, len(moved))
+    return len(moved)
+
+
 #: skin influences per vertex (what glTF players and game engines take)
 MAX_INFLUENCES = 4
 
@@ -282,6 +307,9 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
             deltas[p.name] = np.stack([p.binding @ d for d in dense]).astype(np.float32)
         weights[p.name] = top_influences(sp.csr_matrix(p.binding @ skel.weights))
     rest = skel.transforms(rest_pose(skel))
+    for p in pieces:
+        if p.category == "body":
+            lift_layers(p, weights[p.name], rest)
     for p in pieces:
         if p.category == "body":
             tuck_under(pieces[0], p, skin_w=weights["skin"], cloth_w=weights[p.name],
