@@ -37,11 +37,22 @@ def cmd_rig(args: argparse.Namespace) -> int:
 
 def inspect_head(path: str) -> int:
     from mimika.face.heads import load_head
+    from mimika.face.heads.roles import motion as role_motion
 
     head, rig = load_head(path)
+    roles, how = head.meta.get("roles", {}), head.meta.get("role_how", {})
     print(f"{path}: {len(head.objects)} objects: " + ", ".join(
-        f"{o.name} ({o.category})" for o in head.objects))
+        f"{o.name} ({roles.get(o.name, o.category)})" for o in head.objects))
+    if roles:
+        print(f"\n{'object':<24}{'role':<9}{'category':<10}{'fields':<8}from")
+        for o in head.objects:
+            r = roles[o.name]
+            print(f"{o.name[:23]:<24}{r:<9}{o.category:<10}{role_motion(r):<8}"
+                  f"{how.get(o.name, '')}")
+        print()
     print(f"frame: {head.meta.get('frame', '')}")
+    for note in head.meta.get("pose", []):
+        print(f"pose: {note} (arms hang for the head-and-shoulders shot)")
     if head.meta.get("head_bone"):
         print(f"head AUs follow the skin's bone {head.meta['head_bone']!r}")
     cover = head.meta.get("coverage", {})

@@ -202,7 +202,7 @@ def news_camera(head: Any, view: str, aspect: float) -> Any:
     close-up of the face."""
     from mimika.render.camera import frame_head
 
-    if any(o.category == "body" for o in head.objects):
+    if any(o.category == "body" for o in head.objects) or head.meta.get("body"):
         return frame_head(head, view, aspect=aspect, fill=BUST_FILL, eye_line=EYE_LINE)
     return frame_head(head, view, aspect=aspect, fill=FILL)
 
@@ -218,6 +218,7 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
     depend on ``workers``. ``hair=False`` leaves the hair out. ``light``: a ``--light``
     spec or :class:`~mimika.render.lighting.Lighting` (default: the ``news`` set).
     """
+    from mimika.face.heads.roles import objects_of_role
     from mimika.render.lighting import parse_light
     from mimika.render.parallel import default_workers, render_track
     from mimika.render.skin import SkinParams
@@ -233,8 +234,7 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
                           samples=samples, skin=skin, lighting=parse_light(light, "news"),
                           chunk=chunk,
                           workers=workers,
-                          hidden=() if hair else [o.name for o in rig.head.objects
-                                                  if o.name == "hair"])
+                          hidden=() if hair else objects_of_role(rig.head, "hair"))
     tm["workers"] = workers
     while True:  # the time spent waiting for frames
         t0 = time.perf_counter()

@@ -1,43 +1,65 @@
 """Any glTF / GLB / VRM character as a head: ``--head avatar.glb``.
 
-Meshes become head objects (eye meshes — by name, material or eye bone — rotate for AU61–64;
-teeth and tongue are ``teeth``; the rest ``face``), brought into mimika's frame by the rule of
-:mod:`mimika.face.rigging.frame`. Morph targets are matched to AUs by name
-(:mod:`mimika.face.morphs`: FACS, ARKit-52, Oculus visemes, VRM expressions) and AUs no morph
-covers fall back to seed-002 fields carried onto the mesh by its landmarks
-(:mod:`mimika.face.rigging.assemble`). Head AUs follow the skin's head bone where there is one.
-Each part carries its material's base colour as a texture (the image times the colour factor,
-or a 1×1 image of the factor) with the glTF alpha mode; the renderer's material (skin, lips,
-sclera …, chosen by name) gives the shading. Normal maps are kept, unused, in
-``head.meta["materials"]``.
+Meshes become head objects with a role (:mod:`.roles`: skin, eyes, teeth, tongue, hair, brows,
+lashes, beard, glasses, body, clothes — by name, else by shape), split where one mesh's
+materials name several (:mod:`.gltf_parts`), brought into mimika's frame by the rule of
+:mod:`mimika.face.rigging.frame`; raised arms are lowered through the skeleton
+(:mod:`.gltf_pose`). Morph targets are matched to AUs by name (:mod:`mimika.face.morphs`:
+FACS, ARKit-52, Oculus visemes; VRM expressions by :mod:`.vrm`) and AUs no morph covers fall
+back to seed-002 fields carried onto the skin by its landmarks
+(:mod:`mimika.face.rigging.assemble`) — brows, lashes and beard follow the skin, hair,
+glasses, body and clothes do not take them. Eyes turn as eyeballs about their bone or
+sphere centre: their own eye-look morphs, which would turn them a second time, are not used.
+Head AUs follow the skin's head bone (and half its neck) where there is one. Each part
+carries its material's base colour as a texture (the image times the colour factor, or a 1×1
+image of the factor) with the glTF alpha mode; the renderer's material (skin, lips, sclera
+…, chosen by name; ``toon`` for MToon and unlit) gives the shading. Normal maps are kept,
+unused, in ``head.meta["materials"]``.
 """
 
 from __future__ import annotations
 
 import logging
 import re
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from pathlib import Path
 
 import numpy as np
 
 from mimika.errors import DataError
 from mimika.face.head import Head, MeshObject, Part, Texture
+from mimika.face.heads.gltf_parts import (
+    Piece,
+    eye_pivot,
+    mesh_role,
+    pieces,
+    skin_fields,
+    split_sides,
+)
+from mimika.face.heads.gltf_pose import lower_arms
 from mimika.face.heads.gltf_scene import GltfScene, SceneMaterial, SceneMesh, read_gltf
+from mimika.face.heads.roles import Role, bone_pattern, geometry_role, name_role
+from mimika.face.heads.roles import category as role_category
+from mimika.face.heads.roles import table as role_table
+from mimika.face.heads.vrm import expression_shape, look_au
+from mimika.face.heads.vrm import table as vrm_table
 from mimika.face.morphs import MorphMatch, classify
 from mimika.face.rigging.assemble import AvatarRig, build_rig, head_anchors
-from mimika.face.rigging.features import find_face, sphere_fit
+from mimika.face.rigging.features import find_face
 from mimika.face.rigging.frame import Frame, detect_frame, frame_from_points
 from mimika.face.rigging.generate import Shapes, template_landmarks
 from mimika.face.rigging.landmarks import landmarks68
+from mimika.face.rigs.blendshape import load_table
 
 log = logging.getLogger(__name__)
 
 __all__ = ["EXTENSIONS", "load_gltf_head", "mesh_category", "render_material"]
 
 EXTENSIONS = (".glb", ".gltf", ".vrm")
-_EYE = re.compile(r"eye(?!brow|lash|line|_?lid|shadow)|iris|pupil|cornea|sclera", re.I)
-_TEETH = re.compile(r"teeth|tooth|tongue|gum", re.I)
+#: the eye AUs (turns)
+EYE_AUS = ("AU61", "AU62", "AU63", "AU64")
+#: a face mesh reaching this far below the chin is a body too (cm)
+BODY_BELOW_CHIN_CM = 25.0
 #: renderer material (render/data/materials.json) by words in a glTF material/mesh name
 _RENDER_KEYS = (("cornea", "cornea"), ("pupil", "pupil"), ("iris", "iris"),
                 ("sclera", "sclera"), ("eyewhite", "sclera"), ("lash", "lash"),
@@ -47,14 +69,23 @@ _RENDER_KEYS = (("cornea", "cornea"), ("pupil", "pupil"), ("iris", "iris"),
                 ("body", "skin"))
 
 
-def render_material(name: str, category: str) -> str:
+#: renderer material by role (or category) when the material's name says nothing
+_ROLE_KEYS = {"eyes": "sclera", "teeth": "teeth", "tongue": "tongue", "hair": "hair",
+              "beard": "hair", "brows": "brow", "lashes": "lash", "glasses": "cloth",
+              "clothes": "cloth", "body": "skin_body"}
+
+
+def render_material(name: str, category: str, toon: bool = False) -> str:
     """The renderer's material (its shading: skin, lips, sclera …) for a glTF material
-    ``name``: by the words in it, else skin for face objects, sclera for eyes."""
+    ``name``: ``toon`` for MToon/unlit ones, else by the words in it, else by the object's
+    role or category (``category``: skin for face objects, sclera for eyes …)."""
+    if toon:
+        return "toon"
     low = name.lower().replace("_", "").replace(" ", "")
     for word, key in _RENDER_KEYS:
         if word in low:
             return key
-    return {"eyes": "sclera", "teeth": "teeth"}.get(category, "skin")
+    return _ROLE_KEYS.get(category, "skin")
 
 
 _ALPHA = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
@@ -85,10 +116,12 @@ def part_texture(mat: SceneMaterial, key: str) -> tuple[Texture, str]:
     return Texture(np.round(np.clip(img, 0, 1) * 255).astype(np.uint8), mat.name), mode
 
 
-def _bone(scene: GltfScene, vrm_name: str, pattern: str) -> int | None:
-    if vrm_name in scene.bones:
-        return scene.bones[vrm_name]
-    rx = re.compile(pattern, re.I)
+def _bone(scene: GltfScene, kind: str) -> int | None:
+    """The node of humanoid bone ``kind`` (head, neck, eye_L, eye_R): VRM's, else by name."""
+    vrm = role_table()["vrm_bones"][kind]
+    if vrm in scene.bones:
+        return scene.bones[vrm]
+    rx = bone_pattern(kind)
     for i, n in enumerate(scene.node_names):
         if rx.search(re.split(r"[.:|]", n)[-1]):
             return i
@@ -96,21 +129,12 @@ def _bone(scene: GltfScene, vrm_name: str, pattern: str) -> int | None:
 
 
 def mesh_category(m: SceneMesh, scene: GltfScene, eye_bones: set[int]) -> str:
-    """eyes (held by an eye bone, or named/made of eye, iris, pupil …), teeth (teeth, tongue,
-    gums) or face."""
-    mats = " ".join(scene.materials[k].name for k, _ in m.primitives if 0 <= k <
-                    len(scene.materials))
-    if m.joints is not None and eye_bones:
-        w = np.where(np.isin(m.joints, list(eye_bones)), m.weights, 0.0).sum(1)
-        if np.mean(w > 0.5) > 0.9:
-            return "eyes"
-    if _EYE.search(m.name) and not _TEETH.search(m.name):
-        return "eyes"
-    if _TEETH.search(m.name) or (_TEETH.search(mats) and not _EYE.search(m.name)):
-        return "teeth"
-    if _EYE.search(mats) and not re.search(r"skin|face|head|body", mats, re.I):
-        return "eyes"
-    return "face"
+    """eyes, teeth (teeth, tongue) or face (every other role) for a whole mesh, by its eye
+    bone, names and materials (:mod:`.roles`)."""
+    role = mesh_role(m, scene, eye_bones) or name_role(
+        *(scene.materials[k].name for k, _ in m.primitives if 0 <= k < len(scene.materials)))
+    cat = role_category(role.role) if role else "face"
+    return cat if cat in ("eyes", "teeth") else "face"
 
 
 def _centroid(v: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -157,7 +181,18 @@ def _frame(scene: GltfScene, face: SceneMesh, matches: Mapping[int, MorphMatch],
                  fr.unit, [*fr.notes, "frame from the blink and jaw morphs"])
 
 
-def _shapes(scene: GltfScene, objects: list[tuple[SceneMesh, str]], frame: Frame
+def _side_checked(name: str, hv: np.ndarray, d: np.ndarray, row: dict) -> str:
+    """``name`` with its side swapped when it moves the other side of the face."""
+    if name[-2:] in ("_L", "_R"):
+        x = _centroid(hv, d)[0]
+        if (x < -0.3 and name[-1] == "L") or (x > 0.3 and name[-1] == "R"):
+            name = name[:-1] + ("R" if name[-1] == "L" else "L")
+            row["as"] = name
+            row["how"] += " (side by where it moves)"
+    return name
+
+
+def _shapes(scene: GltfScene, parts: list[Piece], frame: Frame
             ) -> tuple[Shapes, dict[str, str], list[dict]]:
     """Canonical shapes (object → head-frame deltas), their origins and the morph table."""
     shapes: Shapes = {}
@@ -168,60 +203,95 @@ def _shapes(scene: GltfScene, objects: list[tuple[SceneMesh, str]], frame: Frame
         shapes.setdefault(name, {})[obj] = d.astype(np.float32)
         origin.setdefault(name, raw)
 
-    for m, oname in objects:
+    moves = {i: np.any(np.abs(m.morph_deltas) > 0, axis=(1, 2)) for i, m in
+             enumerate(scene.meshes) if m.morph_deltas is not None}
+    for pc in parts:
+        m = pc.mesh
         hv = frame.apply(m.vertices)
         for k, raw in enumerate(m.morph_names):
             mt = classify(raw)
             d = frame.apply_vector(m.morph_deltas[k])
             if mt is not None and not np.any(np.abs(d) > 1e-7):  # moves nothing: no coverage
-                rows.append({"mesh": oname, "morph": raw, "kind": "empty", "as": mt.name,
-                             "how": "all-zero morph; the fallback field takes over"})
+                if not moves[pc.src][k]:  # (split pieces: said once, for the whole mesh)
+                    rows.append({"mesh": pc.name, "morph": raw, "kind": "empty",
+                                 "as": mt.name,
+                                 "how": "all-zero morph; the fallback field takes over"})
                 continue
-            row = {"mesh": oname, "morph": raw, "kind": mt.kind if mt else "unused",
+            row = {"mesh": pc.name, "morph": raw, "kind": mt.kind if mt else "unused",
                    "as": mt.name if mt else "", "how": mt.how if mt else ""}
             rows.append(row)
             if mt is None:
                 continue
-            name = mt.name
-            if name[-2:] in ("_L", "_R"):
-                x = _centroid(hv, d)[0]
-                if (x < -0.3 and name[-1] == "L") or (x > 0.3 and name[-1] == "R"):
-                    name = name[:-1] + ("R" if name[-1] == "L" else "L")
-                    row["as"] = name
-                    row["how"] += " (side by where it moves)"
-            if name in shapes and oname in shapes[name]:
+            name = _side_checked(mt.name, hv, d, row)
+            if name in shapes and pc.name in shapes[name]:
                 row["kind"], row["how"] = "duplicate", f"{name} already from another morph"
                 continue
-            add(name, oname, d, raw)
-    index = {id(m): i for i, m in enumerate(scene.meshes)}
+            add(name, pc.name, d, raw)
     for expr, binds in scene.expressions.items():
-        mt = classify(expr, expression=True)
-        if mt is None or mt.name in shapes or not binds:
+        got = expression_shape(expr)
+        if got is None or got[1] in shapes or not binds:
+            rows.append({"mesh": "(VRM)", "morph": expr, "kind": "unused" if got is None
+                         else "duplicate", "as": got[1] if got else "",
+                         "how": "not an AU" if got is None else
+                         ("binds nothing" if not binds else f"{got[1]} already from a morph")})
             continue
-        for m, oname in objects:
+        kind, name = got
+        gain = scene.vrm_look.get(look_au(name) or "", 1.0) if \
+            scene.vrm_look_type == "expression" else 1.0
+        for pc in parts:
+            m = pc.mesh
             acc = None
             for mi, k, w in binds:
-                if mi == index[id(m)] and m.morph_deltas is not None and k < len(m.morph_deltas):
-                    d = w * frame.apply_vector(m.morph_deltas[k])
+                if mi == pc.src and m.morph_deltas is not None and 0 <= k < len(m.morph_deltas):
+                    d = gain * w * frame.apply_vector(m.morph_deltas[k])
                     acc = d if acc is None else acc + d
-            if acc is not None:
-                add(mt.name, oname, acc, f"VRM {expr}")
-        rows.append({"mesh": "(VRM)", "morph": expr, "kind": mt.kind, "as": mt.name,
-                     "how": mt.how})
+            if acc is not None and np.any(np.abs(acc) > 1e-7):
+                add(name, pc.name, acc, f"VRM {expr}")
+        rows.append({"mesh": "(VRM)", "morph": expr, "kind": kind, "as": name,
+                     "how": "VRM expression" + (f" ×{gain:.2g} (lookAt range)"
+                                                if gain != 1.0 else "")})
     return shapes, origin, rows
 
 
-def _head_weight(scene: GltfScene, objects: list[tuple[SceneMesh, str]], head_node: int | None,
-                 verts: list[np.ndarray], anchors: Mapping[str, np.ndarray]) -> np.ndarray:
+def _eye_aus_on_eyes(shapes: Shapes, origin: dict[str, str], rows: list[dict],
+                     turning: Collection[str]) -> None:
+    """Drop the eye AUs' shapes (eyeLook…, VRM look…) from eyes that turn: the turn already
+    moves them (Ready Player Me's eye meshes carry eyeLook morphs that would turn them again),
+    so pose, render and the exported file turn them alike; shapes left empty are dropped."""
+    base = load_table()["aus"]
+    names = {n for code in EYE_AUS for n in base[code].get("shapes", {})}
+    names |= {n for code in EYE_AUS for alt in vrm_table()["aus"].get(code, []) for n in alt}
+    names |= {n + s for n in names for s in ("_L", "_R")}
+    for n in names & set(shapes):
+        hit = [o for o in shapes[n] if o in turning]
+        for o in hit:
+            del shapes[n][o]
+        if hit:
+            for r in rows:
+                if r["as"] == n and (r["mesh"] in hit or r["mesh"] == "(VRM)"):
+                    r["how"] += "; on the eyes: they turn by rotation, not by this morph"
+        if not shapes[n]:
+            del shapes[n]
+            origin.pop(n, None)
+            for r in rows:
+                if r["as"] == n and r["kind"] not in ("empty", "unused", "duplicate"):
+                    r["kind"] = "eye turn"
+
+
+def _head_weight(scene: GltfScene, parts: list[Piece], verts: list[np.ndarray],
+                 bones: Mapping[str, int | None], anchors: Mapping[str, np.ndarray]
+                 ) -> np.ndarray:
     """Per vertex: how much it follows head motion (skin weight of the head bone and its
-    children; 1 for meshes parented under the head; else the chin → neck-base fall-off)."""
+    children; 1 for meshes under the head; else the chin → neck-base fall-off)."""
+    head_node = bones["head"]
     below = scene.descendants(head_node) if head_node is not None else set()
     top, bot = float(anchors["chin"][1]), float(anchors["neck_base"][1])
     out = []
-    for (m, _), v in zip(objects, verts, strict=True):
+    for pc, v in zip(parts, verts, strict=True):
+        m = pc.mesh
         if head_node is not None and m.joints is not None:
-            out.append(np.where(np.isin(m.joints, list(below)), m.weights, 0.0).sum(1)
-                       / np.maximum(m.weights.sum(1), 1e-9))
+            w = np.where(np.isin(m.joints, list(below)), m.weights, 0.0).sum(1)
+            out.append(w / np.maximum(m.weights.sum(1), 1e-9))
         elif head_node is not None and m.node in below:
             out.append(np.ones(len(v)))
         else:
@@ -230,74 +300,118 @@ def _head_weight(scene: GltfScene, objects: list[tuple[SceneMesh, str]], head_no
     return np.concatenate(out).astype(np.float32)
 
 
+def _face_piece(parts: list[Piece], path: Path) -> int:
+    """The piece that holds the face: the skin with the most AU morphs (then vertices); a
+    file that names no skin: among the pieces named nothing or body (Mixamo's "Body")."""
+    def score(i: int) -> tuple[int, int]:
+        m = parts[i].mesh
+        n = sum(1 for k, name in enumerate(m.morph_names) if classify(name) and
+                np.any(m.morph_deltas[k] != 0))
+        return n, len(m.vertices)
+
+    for ok in (("skin",), (None, "body")):
+        cand = [i for i, pc in enumerate(parts) if (pc.role.role if pc.role else None) in ok]
+        if cand:
+            return max(cand, key=score)
+    raise DataError(f"{path}: every mesh is named as eyes, teeth, hair, glasses or clothes; "
+                    "no face mesh to animate (name the face mesh 'Head' or 'Face')")
+
+
+def _objects(scene: GltfScene, parts: list[Piece], verts: list[np.ndarray],
+             pivots: Mapping[int, np.ndarray | None]) -> tuple[list[MeshObject], dict]:
+    """The head objects of ``parts`` (head-frame vertices ``verts``) and their materials."""
+    objs, materials = [], {}
+    for i, (pc, v) in enumerate(zip(parts, verts, strict=True)):
+        m, cat = pc.mesh, role_category(pc.role.role)
+        out = []
+        for k, f in m.primitives:
+            mat = scene.materials[k] if 0 <= k < len(scene.materials) else None
+            key = render_material(mat.name if mat else m.name, pc.role.role,
+                                  bool(mat and mat.toon))
+            if mat is None:
+                out.append(Part(key, f))
+                continue
+            materials[mat.name] = mat
+            tex, mode = part_texture(mat, key)
+            out.append(Part(key, f, tex, mode))
+        # glTF's v runs down the image, mimika's up; no UVs: the flat colour's 1×1 texture
+        uvs = (np.zeros((len(v), 2)) if m.uvs is None else
+               np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]])
+        objs.append(MeshObject(pc.name, cat, v.astype(np.float32), tuple(out), pivots.get(i),
+                               uvs))
+    return objs, materials
+
+
 def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     """The head and AU rig of a glTF/GLB/VRM file (see the module doc)."""
     p = Path(path)
     scene = read_gltf(p)
-    eye_bones = {b for b in (_bone(scene, "leftEye", r"^(left_?eye|eye_?l(eft)?|l_?eye)$"),
-                             _bone(scene, "rightEye", r"^(right_?eye|eye_?r(ight)?|r_?eye)$"))
-                 if b is not None}
-    cats = [mesh_category(m, scene, eye_bones) for m in scene.meshes]
-    face_ids = [i for i, c in enumerate(cats) if c == "face"]
-    if not face_ids:
-        raise DataError(f"{p}: every mesh looks like eyes or teeth; no face mesh to animate")
-    matches = {i: {k: mt for k, n in enumerate(m.morph_names) if (mt := classify(n))
-                   and m.morph_deltas is not None and np.any(m.morph_deltas[k] != 0)}
-               for i, m in enumerate(scene.meshes)}
-    face_i = max(face_ids, key=lambda i: (len(matches[i]), len(scene.meshes[i].vertices)))
-    face = scene.meshes[face_i]
-    frame = _frame(scene, face, matches[face_i], p)
-    names: dict[str, int] = {}
-    objects: list[tuple[SceneMesh, str]] = []
-    for m in scene.meshes:
-        base = re.sub(r"[^\w.-]", "_", m.name) or "mesh"
-        names[base] = names.get(base, 0) + 1
-        objects.append((m, base if names[base] == 1 else f"{base}.{names[base] - 1}"))
-    skin_name = objects[face_i][1]
-    verts = [frame.apply(m.vertices) for m, _ in objects]
-    shapes, origin, rows = _shapes(scene, objects, frame)
-    lm_idx, lm_pts = landmarks68(verts[face_i], frame.features, template_landmarks())
+    bones = {k: _bone(scene, k) for k in ("head", "neck", "eye_L", "eye_R")}
+    eye_bones = {b for b in (bones["eye_L"], bones["eye_R"]) if b is not None}
+    parts = pieces(scene, eye_bones)
+    face_i = _face_piece(parts, p)
+    face = parts[face_i]
+    face.role = Role("skin", face.role.how if face.role and face.role.role == "skin"
+                     else "holds the face")
+    matches = {k: mt for k, n in enumerate(face.mesh.morph_names) if (mt := classify(n))
+               and np.any(face.mesh.morph_deltas[k] != 0)}
+    frame = _frame(scene, face.mesh, matches, p)
+    lm_idx, lm_pts = landmarks68(frame.apply(face.mesh.vertices), frame.features,
+                                 template_landmarks())
+    notes = lower_arms(scene, [pc.mesh for pc in parts], frame.apply, frame.rotation,
+                       float(lm_pts[27:31, 0].mean()))
+    verts = [frame.apply(pc.mesh.vertices) for pc in parts]
+    feats = {"eye_L": frame.features.eye_L, "eye_R": frame.features.eye_R,
+             "mouth": frame.features.mouth, "chin": lm_pts[8]}
+    box = (verts[face_i].min(0), verts[face_i].max(0))
+    for pc, v in zip(parts, verts, strict=True):
+        if pc.role is None:
+            pc.role = geometry_role(v, feats, box)
+    # eyes: one piece per eye, turning about its bone or sphere centre
+    bone_at = {b: frame.apply(scene.node_position(b)) for b in eye_bones}
+    split: list[Piece] = []
+    for pc, v in zip(parts, verts, strict=True):
+        split += split_sides(pc, v[:, 0]) if pc.role.role == "eyes" else [pc]
+    skin_name = face.name
+    parts = split
+    face_i = next(i for i, pc in enumerate(parts) if pc.name == skin_name)
+    verts = [frame.apply(pc.mesh.vertices) for pc in parts]
+    expression_gaze = scene.vrm_version is not None and scene.vrm_look_type == "expression"
+    pivots = {i: eye_pivot(pc, v, scene, bone_at) for i, (pc, v) in
+              enumerate(zip(parts, verts, strict=True))
+              if pc.role.role == "eyes" and not expression_gaze}
+    mesh_objs, materials = _objects(scene, parts, verts, pivots)
+    shapes, origin, rows = _shapes(scene, parts, frame)
+    _eye_aus_on_eyes(shapes, origin, rows, {parts[i].name for i, c in pivots.items()
+                                            if c is not None})
     eyes: dict[str, np.ndarray] = {}
-    mesh_objs: list[MeshObject] = []
-    materials: dict[str, object] = {}
-    for (m, oname), v, cat in zip(objects, verts, cats, strict=True):
-        parts = []
-        for k, f in m.primitives:
-            mat = scene.materials[k] if 0 <= k < len(scene.materials) else None
-            key = render_material(mat.name if mat else m.name, cat)
-            if mat is None:
-                parts.append(Part(key, f))
-                continue
-            materials[mat.name] = mat
-            tex, mode = part_texture(mat, key)
-            parts.append(Part(key, f, tex, mode))
-        pivot = None
-        if cat == "eyes":
-            pivot = sphere_fit(v)[0]
-            side = "eye_L" if pivot[0] > 0 else "eye_R"
-            eyes.setdefault(side, pivot)
-        # glTF's v runs down the image, mimika's up; no UVs: the flat colour's 1×1 texture
-        uvs = (np.zeros((len(v), 2)) if m.uvs is None else
-               np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]])
-        mesh_objs.append(MeshObject(oname, cat, v.astype(np.float32), tuple(parts), pivot, uvs))
+    for c in (c for c in pivots.values() if c is not None):
+        eyes.setdefault("eye_L" if c[0] > 0 else "eye_R", c)
     for side, pt in (("eye_L", frame.features.eye_L), ("eye_R", frame.features.eye_R)):
         eyes.setdefault(side, pt - [0.0, 0.0, 1.2])  # no eye mesh: behind the opening
     anchors = head_anchors(verts[face_i], lm_pts, eyes)
-    head_node = _bone(scene, "head", r"^(head|.*_head)$")
-    if head_node is not None:  # head AUs turn about the head bone
-        anchors["neck_pivot"] = frame.apply(scene.node_position(head_node))
-    weight = _head_weight(scene, objects, head_node, verts, anchors)
+    if bones["head"] is not None:  # head AUs turn about the head bone
+        anchors["neck_pivot"] = frame.apply(scene.node_position(bones["head"]))
+    weight = _head_weight(scene, parts, verts, bones, anchors)
+    roles = {pc.name: pc.role.role for pc in parts}
+    body = any(role_category(r) == "body" for r in roles.values()) or bool(
+        verts[face_i][:, 1].min() < lm_pts[8, 1] - BODY_BELOW_CHIN_CM)
     head = Head(p.stem, tuple(mesh_objs), lm_idx, anchors, landmark_object=skin_name,
                 description=f"glTF character from {p}",
                 meta={"source": str(p), "frame": frame.describe(), "frame_obj": frame,
-                      "morphs": rows, "materials": materials,
+                      "morphs": rows, "materials": materials, "roles": roles,
+                      "role_how": {pc.name: pc.role.how for pc in parts}, "body": body,
+                      "pose": notes,
                       "parts": {o.name: [scene.materials[k].name if 0 <= k < len(
-                          scene.materials) else "default" for k, _ in m.primitives]
-                          for (m, _), o in zip(objects, mesh_objs, strict=True)},
-                      "head_bone": scene.node_names[head_node] if head_node is not None
-                      else None})
-    rig, cover = build_rig(head, shapes, origin, head_weight=weight)
+                          scene.materials) else "default" for k, _ in pc.mesh.primitives]
+                          for pc, o in zip(parts, mesh_objs, strict=True)},
+                      "head_bone": scene.node_names[bones["head"]]
+                      if bones["head"] is not None else None})
+    eye_turn = scene.vrm_look if scene.vrm_version is not None and not expression_gaze \
+        else None
+    rig, cover = build_rig(head, shapes, origin, head_weight=weight,
+                           generator=skin_fields(roles), eye_turn=eye_turn)
     head.meta["coverage"] = cover
     log.info("%s: %s; %d of its morphs used", p, frame.describe(),
-             sum(r["kind"] not in ("unused", "duplicate", "empty") for r in rows))
+             sum(r["kind"] not in ("unused", "duplicate", "empty", "eye turn") for r in rows))
     return head, rig

@@ -21,13 +21,14 @@ from pathlib import Path
 import numpy as np
 
 from mimika.errors import DataError
+from mimika.face.heads.vrm import read_vrm, toon_materials, vrm0_base_color
 from mimika.io.gltf_ext.webp import texture_source
 from mimika.io.gltf_source import load_source
 from mimika.limits import current
 
 log = logging.getLogger(__name__)
 
-__all__ = ["GltfScene", "SceneMaterial", "SceneMesh", "read_gltf"]
+__all__ = ["GltfScene", "SceneMaterial", "SceneMesh", "SkinBind", "read_gltf"]
 
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
            5126: np.float32}
@@ -53,12 +54,36 @@ class SceneMaterial:
     alpha_mode: str = "OPAQUE"
     alpha_cutoff: float = 0.5
     double_sided: bool = False
+    toon: bool = False  #: MToon or unlit (VRM): drawn flat, see :mod:`.vrm`
+
+
+@dataclass
+class SkinBind:
+    """How a skinned mesh is placed: its stored (bind-space) positions, per vertex the joint
+    slots (N, K) into ``joint_nodes`` and normalised weights (N, K), and per joint its node
+    and inverse bind matrix (J, 4, 4)."""
+
+    vertices: np.ndarray
+    slots: np.ndarray
+    weights: np.ndarray
+    joint_nodes: np.ndarray
+    ibm: np.ndarray
+
+    def matrices(self, world: np.ndarray) -> np.ndarray:
+        """Per-vertex skinning matrices (N, 4, 4) for node world matrices ``world``."""
+        mats = world[self.joint_nodes] @ self.ibm
+        return np.einsum("nk,nkij->nij", self.weights, mats[self.slots])
+
+    def subset(self, idx: np.ndarray) -> SkinBind:
+        return SkinBind(self.vertices[idx], self.slots[idx], self.weights[idx],
+                        self.joint_nodes, self.ibm)
 
 
 @dataclass
 class SceneMesh:
     """One mesh node: positions (N, 3), triangles per primitive with a material index,
-    UVs (N, 2) or None, morph targets (names, deltas (M, N, 3)), and skin joints/weights."""
+    UVs (N, 2) or None, morph targets (names, deltas (M, N, 3)), and skin joints/weights
+    (``bind``: how the skin placed it, for posing it again)."""
 
     name: str
     node: int
@@ -69,6 +94,40 @@ class SceneMesh:
     morph_deltas: np.ndarray | None = None
     joints: np.ndarray | None = None  #: (N, 4) node indices
     weights: np.ndarray | None = None  #: (N, 4)
+    mesh_name: str = ""  #: the glTF mesh's own name (``name`` is the node's)
+    bind: SkinBind | None = None
+
+    def subset(self, prims: list[tuple[int, np.ndarray]], name: str) -> SceneMesh:
+        """The mesh of primitives ``prims`` ((material, triangles) over this mesh's vertices)
+        only, under ``name``, with the vertices they use renumbered."""
+        keep = np.unique(np.concatenate([f.reshape(-1) for _, f in prims]))
+        new = np.full(len(self.vertices), -1, np.int64)
+        new[keep] = np.arange(len(keep))
+
+        def sub(a: np.ndarray | None, axis: int = 0) -> np.ndarray | None:
+            return None if a is None else np.take(a, keep, axis=axis)
+
+        return SceneMesh(name, self.node, self.vertices[keep],
+                         [(k, new[f]) for k, f in prims],
+                         sub(self.uvs), list(self.morph_names), sub(self.morph_deltas, 1),
+                         sub(self.joints), sub(self.weights), self.mesh_name,
+                         None if self.bind is None else self.bind.subset(keep))
+
+    def posed(self, rest: np.ndarray, world: np.ndarray) -> None:
+        """Place the mesh again for node world matrices ``world`` (rest: ``rest``): skinned
+        meshes through their joints, others with their node; morph deltas follow."""
+        if self.bind is not None:
+            m0, m1 = self.bind.matrices(rest), self.bind.matrices(world)
+            v = self.bind.vertices
+            self.vertices = np.einsum("nij,nj->ni", m1[:, :3, :3], v) + m1[:, :3, 3]
+            lin = m1[:, :3, :3] @ np.linalg.inv(m0[:, :3, :3])
+        else:
+            d = world[self.node] @ np.linalg.inv(rest[self.node])
+            self.vertices = self.vertices @ d[:3, :3].T + d[:3, 3]
+            lin = np.broadcast_to(d[:3, :3], (len(self.vertices), 3, 3))
+        if self.morph_deltas is not None:
+            self.morph_deltas = np.einsum("nij,mnj->mni", lin, self.morph_deltas
+                                          ).astype(np.float32)
 
 
 @dataclass
@@ -85,6 +144,9 @@ class GltfScene:
     bones: dict[str, int] = field(default_factory=dict)  #: humanoid bone → node (VRM)
     expressions: dict[str, list[tuple[int, int, float]]] = field(default_factory=dict)
     #: VRM expression preset → [(mesh index in :attr:`meshes`, morph index, weight 0–1)]
+    vrm_look_type: str = "bone"  #: VRM lookAt: eye bones turn, or look expressions
+    vrm_look: dict[str, float] = field(default_factory=dict)
+    #: eye AU → fraction of its turn a 30° gaze gives under the VRM lookAt ranges
 
     def node_position(self, node: int) -> np.ndarray:
         return self.node_world[node, :3, 3].copy()
@@ -211,15 +273,19 @@ class _Reader:
 
 def _materials(r: _Reader) -> list[SceneMaterial]:
     out = []
+    toon = toon_materials(r.g)
     for i, m in enumerate(r.g.materials or []):
         pbr = m.pbrMetallicRoughness
         col = tuple(float(c) for c in (pbr.baseColorFactor if pbr and pbr.baseColorFactor
                                        else (1, 1, 1, 1)))
         bct = pbr.baseColorTexture.index if pbr and pbr.baseColorTexture else None
+        if bct is None and i in toon:  # VRM 0.x: MToon's own colour and texture
+            vcol, bct = vrm0_base_color(r.g, i)
+            col = vcol or col
         nt = m.normalTexture.index if m.normalTexture else None
         out.append(SceneMaterial(m.name or f"material{i}", col, r.image(bct), r.image(nt),
                                  m.alphaMode or "OPAQUE", float(m.alphaCutoff or 0.5),
-                                 bool(m.doubleSided)))
+                                 bool(m.doubleSided), i in toon))
     return out
 
 
@@ -342,7 +408,7 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
     if len(names) != n_targets:
         names = [f"morph{k}" for k in range(n_targets)]
     uv = np.concatenate(uvs) if all(u is not None for u in uvs) else None
-    jt = wt = None
+    jt = wt = bind = None
     if node.skin is not None and all(j is not None for j in joints) and all(
             w is not None for w in weights):
         if not isinstance(node.skin, int) or not 0 <= node.skin < len(g.skins or []):
@@ -361,10 +427,10 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
         ibm = (r.accessor(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
                if skin.inverseBindMatrices is not None else np.tile(np.eye(4), (len(jnodes),
                                                                                 1, 1)))
-        mats = world[jnodes] @ ibm  # (J, 4, 4) skinning matrices at rest
         s = wt.sum(1, keepdims=True)
         wn = wt / np.where(s > 0, s, 1.0)
-        m = np.einsum("nk,nkij->nij", wn, mats[jt_local])
+        bind = SkinBind(v, jt_local, wn, jnodes, ibm)
+        m = bind.matrices(world)
         v = np.einsum("nij,nj->ni", m[:, :3, :3], v) + m[:, :3, 3]
         if deltas is not None:
             deltas = np.einsum("nij,mnj->mni", m[:, :3, :3], deltas)
@@ -375,45 +441,8 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
             deltas = deltas @ m[:3, :3].T
     name = node.name or mesh.name or f"mesh{node.mesh}"
     return SceneMesh(name, ni, v, faces, uv, names,
-                     None if deltas is None else deltas.astype(np.float32), jt, wt)
-
-
-def _vrm(g, scene: GltfScene, mesh_of_node: dict[int, list[int]]) -> None:
-    ext = g.extensions or {}
-    if "VRMC_vrm" in ext:
-        vrm = ext["VRMC_vrm"]
-        scene.vrm_version = 1
-        for bone, spec in ((vrm.get("humanoid") or {}).get("humanBones") or {}).items():
-            if isinstance(spec, dict) and "node" in spec:
-                scene.bones[bone] = int(spec["node"])
-        for group in ("preset", "custom"):
-            for name, spec in ((vrm.get("expressions") or {}).get(group) or {}).items():
-                binds = []
-                for b in spec.get("morphTargetBinds") or []:
-                    for mi in mesh_of_node.get(int(b["node"]), []):
-                        binds.append((mi, int(b["index"]), float(b.get("weight", 1.0))))
-                scene.expressions[name] = binds
-    elif "VRM" in ext:
-        vrm = ext["VRM"]
-        scene.vrm_version = 0
-        for hb in (vrm.get("humanoid") or {}).get("humanBones") or []:
-            if "bone" in hb and "node" in hb:
-                scene.bones[hb["bone"]] = int(hb["node"])
-        nodes_of_mesh: dict[int, list[int]] = {}
-        for ni, nd in enumerate(g.nodes):
-            if nd.mesh is not None:
-                nodes_of_mesh.setdefault(nd.mesh, []).append(ni)
-        for grp in (vrm.get("blendShapeMaster") or {}).get("blendShapeGroups") or []:
-            name = grp.get("presetName") or grp.get("name")
-            if not name or name == "unknown":
-                name = grp.get("name")
-            binds = []
-            for b in grp.get("binds") or []:
-                for ni in nodes_of_mesh.get(int(b["mesh"]), []):
-                    for mi in mesh_of_node.get(ni, []):
-                        binds.append((mi, int(b["index"]), float(b.get("weight", 100)) / 100))
-            if name:
-                scene.expressions[name] = binds
+                     None if deltas is None else deltas.astype(np.float32), jt, wt,
+                     mesh.name or "", bind)
 
 
 def read_gltf(path: str | Path) -> GltfScene:
@@ -463,5 +492,5 @@ def _read(p: Path) -> GltfScene:
                         "have no extent")
     scene = GltfScene(p, meshes, _materials(r), [nd.name or f"node{i}" for i, nd in
                                                  enumerate(g.nodes)], world, parent)
-    _vrm(g, scene, mesh_of_node)
+    read_vrm(g, scene, mesh_of_node)
     return scene

@@ -4,7 +4,8 @@ Every AU takes the first source that covers it:
 
 1. **FACS morphs** named for the AU (``AU12``, ``AU12_L``/``AU12_R``);
 2. **ARKit morphs**: all the shapes ``facs/data/ict_aus.json`` composes the AU from;
-3. **visemes** (``morph_names.json``'s ``viseme_aus``: jaw opening, rounding, pressing);
+3. **visemes** (``morph_names.json``'s ``viseme_aus``: jaw opening, rounding, pressing), then
+   **VRM expressions** (``vrm.json``'s ``aus``: an emotion preset shared by its AUs);
 4. **seed-002 fields**: the AU's ARKit shapes generated on the mesh
    (:func:`~mimika.face.rigging.generate.generate_shapes`) where the avatar lacks them.
 
@@ -16,11 +17,12 @@ centres, with the eyeLook lid shapes.
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from mimika.face.head import Head
+from mimika.face.heads.vrm import table as vrm_table
 from mimika.face.morphs import table as morph_table
 from mimika.face.rigging.generate import Shapes, available, generate_shapes
 from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet, load_table
@@ -57,7 +59,12 @@ def _resolve(name: str, have: Mapping[str, str]) -> list[str] | None:
 def _plan(have: Mapping[str, str]) -> tuple[dict, Coverage, set[str]]:
     """AU table, coverage and the shapes to generate, for shapes ``have`` (name → origin)."""
     base = load_table()
-    vis = {k: v for k, v in morph_table()["viseme_aus"].items() if not k.startswith("_")}
+    alts: dict[str, list[tuple[str, dict]]] = {}  # visemes, then VRM expressions
+    for k, v in morph_table()["viseme_aus"].items():
+        if not k.startswith("_"):
+            alts.setdefault(k, []).append(("viseme", v))
+    for k, vs in vrm_table()["aus"].items():
+        alts.setdefault(k, []).extend(("vrm", v) for v in vs)
     gen_ok = set(available())
     table = {"side_mask_width_cm": base.get("side_mask_width_cm", 0.8), "aus": {}}
     cover: Coverage = {}
@@ -75,9 +82,10 @@ def _plan(have: Mapping[str, str]) -> tuple[dict, Coverage, set[str]]:
                 entry["shapes"] = dict(shapes)
                 cover[code] = ("arkit", ", ".join(dict.fromkeys(
                     have[s] for n in shapes for s in got[n])))
-            elif code in vis and all(_resolve(n, have) for n in vis[code]):
-                entry["shapes"] = dict(vis[code])
-                cover[code] = ("viseme", ", ".join(have[n] for n in vis[code]))
+            elif alt := next((a for a in alts.get(code, ()) if all(_resolve(n, have)
+                                                                   for n in a[1])), None):
+                entry["shapes"] = dict(alt[1])
+                cover[code] = (alt[0], ", ".join(have.get(n, n) for n in alt[1]))
             else:
                 missing = [n for n in shapes if not got[n]]
                 gen = [s for n in missing for s in ((n,) if n in gen_ok else
@@ -104,15 +112,22 @@ def _plan(have: Mapping[str, str]) -> tuple[dict, Coverage, set[str]]:
 
 
 def build_rig(head: Head, shapes: Shapes, origins: Mapping[str, str], *,
-              head_weight: np.ndarray | None = None, generate: bool = True
-              ) -> tuple[AvatarRig, Coverage]:
+              head_weight: np.ndarray | None = None, generate: bool = True,
+              generator: Callable[[Head, list[str]], Shapes] = generate_shapes,
+              eye_turn: Mapping[str, float] | None = None) -> tuple[AvatarRig, Coverage]:
     """The AU rig of ``head`` from its ``shapes`` (canonical name → object → deltas) whose
-    ``origins`` name the morph each came from; missing shapes are generated from fields."""
+    ``origins`` name the morph each came from; missing shapes are made by ``generator``
+    (default: from fields on every object they move). ``eye_turn``: a factor on eye AUs'
+    turns (a VRM's lookAt ranges)."""
     have = {n: origins.get(n, n) for n in shapes}
     table, cover, need = _plan(have)
+    for code, f in (eye_turn or {}).items():
+        spec = table["aus"].get(code, {})
+        if "eye_rotate_deg" in spec:
+            spec["eye_rotate_deg"] = [f * a for a in spec["eye_rotate_deg"]]
     all_shapes = dict(shapes)
     if need and generate:
-        gen = generate_shapes(head, sorted(need))
+        gen = generator(head, sorted(need))
         all_shapes.update(gen)
     elif need:
         table["aus"] = {c: e for c, e in table["aus"].items()
