@@ -39,6 +39,8 @@ BACKFACE = 0.3  # brightness of back faces (the inside of the skin seen through 
 SKIN_LIKE = ("skin", "lips", "skin_body")
 #: linear colour of the oral mucosa (sRGB #a5524f)
 MUCOSA = (0.376, 0.085, 0.077)
+#: object categories drawn after the skin: they lie mostly behind it
+INNER = ("eyes", "teeth")
 #: the key light's penumbra (cm) for soft and hard shadows
 PENUMBRA = {"soft": 0.45, "hard": 0.1}
 
@@ -166,6 +168,7 @@ class _GpuObject:
     def __init__(self, ctx: Any, prog: Any, obj: MeshObject,
                  face: np.ndarray | None = None) -> None:
         self.name = obj.name
+        self.category = obj.category
         self.n_vertices = obj.n_vertices
         faces = np.concatenate([p.faces for p in obj.parts]).astype(np.int32)
         if len(faces) and (faces.min() < 0 or faces.max() >= obj.n_vertices):
@@ -176,6 +179,9 @@ class _GpuObject:
         if not obj.oriented and _winding_inward(obj.vertices, faces):
             log.info("object %r: faces wind clockwise seen from outside; flipping", obj.name)
             faces = faces[:, [0, 2, 1]].copy()
+        ranges = _split_off_face(obj, faces, face)
+        if len(faces):
+            faces = np.concatenate([f for _, f, _ in ranges])
         self.faces = faces
         # normals: on the welded mesh when the object is split at UV seams
         if obj.weld is not None:
@@ -191,17 +197,24 @@ class _GpuObject:
             self.incidence = incidence_matrix(faces, obj.n_vertices)
         #: material, first index, index count, texture (or None), alpha mode
         self.parts: list[tuple[Material, int, int, Any, str]] = []
+        #: first indices of the parts off the face, drawn without the wrinkles
+        self.smooth: set[int] = set()
         textured = obj.uvs is not None and any(p.texture is not None for p in obj.parts)
         self.textures: list[Any] = []
-        first = 0
+        texs = []
         for p in obj.parts:
-            tex = None
-            if textured and p.texture is not None:
-                tex = _upload_texture(ctx, p.texture.image)
-                self.textures.append(tex)
-            self.parts.append((material(p.material), first, 3 * len(p.faces), tex,
+            texs.append(_upload_texture(ctx, p.texture.image)
+                        if textured and p.texture is not None else None)
+            if texs[-1] is not None:
+                self.textures.append(texs[-1])
+        first = 0
+        for i, f, smooth in ranges:
+            p, tex = obj.parts[i], texs[i]
+            if smooth:
+                self.smooth.add(first)
+            self.parts.append((material(p.material), first, 3 * len(f), tex,
                                p.alpha_mode if tex is not None else "opaque"))
-            first += 3 * len(p.faces)
+            first += 3 * len(f)
         #: position, normal, occlusion (ambient occlusion, mouth visibility, inside the mouth)
         self.interleaved = np.empty((obj.n_vertices, 9), np.float32)
         self.interleaved[:, 6:] = (1.0, 1.0, 0.0)
@@ -260,6 +273,26 @@ class _GpuObject:
                   *self.textures):
             if o is not None:
                 o.release()
+
+
+def _split_off_face(obj: MeshObject, faces: np.ndarray, face: np.ndarray | None
+                    ) -> list[tuple[int, np.ndarray, bool]]:
+    """The triangles of each part of ``obj`` (``faces``: all parts' in order) as (part index,
+    triangles, smooth); a skin-like part of the object with the face units ``face`` comes in
+    two: its triangles on the face, then those with no corner on it (smooth: drawn without
+    the wrinkles — llvmpipe runs every branch of a shader, taken or not). Empty ranges are
+    left out."""
+    out = []
+    first = 0
+    for i, p in enumerate(obj.parts):
+        f = faces[first: first + len(p.faces)]
+        first += len(p.faces)
+        if face is None or p.material not in SKIN_LIKE:
+            out.append((i, f, False))
+            continue
+        on = (face[:, 2] > 0.0)[f].any(axis=1)
+        out += [(i, f[on], False), (i, f[~on], True)]
+    return [r for r in out if len(r[1])]
 
 
 def _upload_texture(ctx: Any, image: np.ndarray) -> Any:
@@ -423,9 +456,7 @@ class Renderer:
                 p["u_view"].write(self._view[0])
                 p["u_proj"].write(self._view[1])
             glass, cut, fringe = [], [], []
-            # the skin (a head's first object) goes last of the opaque ones: where clothes and
-            # eyes cover it, it then fails the depth test before it is shaded
-            for o in self._objects[1:] + self._objects[:1]:
+            for o in self._opaque_order():
                 for mat, first, count, tex, mode in o.parts:
                     if mat.alpha < 1.0:
                         glass.append((o, mat, first, count, tex))
@@ -440,14 +471,10 @@ class Renderer:
                     else:
                         ctx.disable(ctx.CULL_FACE)
                     if skin is not None and skin.handles(o, first):
-                        if "u_wr" in skin.final:
-                            skin.final["u_wr"].write(self._wr if self._wr is not None
-                                                     and o.face_vbo is not None else
-                                                     bytes(4 * 28))
-                        skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE, tex)
+                        skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE, tex,
+                                  self._wr if o.face_vbo is not None else None)
                         continue
-                    self._part(gl, o, mat, tex, _OPAQUE).render(ctx.TRIANGLES, vertices=count,
-                                                               first=first)
+                    self._draw_part(gl, ctx, o, mat, first, count, tex, _OPAQUE)
             ctx.disable(ctx.CULL_FACE)
             if cut:
                 # cut-outs and the opaque core of blended parts (hair, lashes): their depth
@@ -455,25 +482,21 @@ class Renderer:
                 # front — stacked hair cards would otherwise be lit layer after layer
                 fbo.color_mask = False, False, False, False
                 for o, mat, first, count, tex in cut:
-                    self._part(gl, o, mat, tex, _CUT, depth_only=True).render(
-                        ctx.TRIANGLES, vertices=count, first=first)
+                    self._draw_part(gl, ctx, o, mat, first, count, tex, _CUT, depth_only=True)
                 fbo.color_mask = True, True, True, True
                 ctx.depth_func = "=="
                 for o, mat, first, count, tex in cut:
-                    self._part(gl, o, mat, tex, _CUT).render(ctx.TRIANGLES, vertices=count,
-                                                            first=first)
+                    self._draw_part(gl, ctx, o, mat, first, count, tex, _CUT)
                 ctx.depth_func = "<"
             if glass or fringe:
                 ctx.enable(ctx.BLEND)
                 ctx.depth_mask = False
                 ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
                 for o, mat, first, count, tex in glass:
-                    self._part(gl, o, mat, tex, _OPAQUE).render(ctx.TRIANGLES, vertices=count,
-                                                               first=first)
+                    self._draw_part(gl, ctx, o, mat, first, count, tex, _OPAQUE)
                 # soft edges of blended parts over everything drawn so far (premultiplied)
                 for o, mat, first, count, tex in fringe:
-                    self._part(gl, o, mat, tex, _FRINGE).render(ctx.TRIANGLES, vertices=count,
-                                                               first=first)
+                    self._draw_part(gl, ctx, o, mat, first, count, tex, _FRINGE)
                 ctx.depth_mask = True
                 ctx.disable(ctx.BLEND)
             if "desk_vao" in gl:
@@ -493,6 +516,14 @@ class Renderer:
             raise RenderError(f"rendering {self.head.name!r} failed: {exc}") from exc
         w, h = self.size
         return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
+
+    def _opaque_order(self) -> list[_GpuObject]:
+        """The objects in the order their opaque parts are drawn: clothes and the like, the
+        skin (a head's first object; where clothes cover it, it fails the depth test before
+        it is shaded), then what lies mostly behind it (eyes, teeth, tongue)."""
+        rest = self._objects[1:]
+        return ([o for o in rest if o.category not in INNER] + self._objects[:1]
+                + [o for o in rest if o.category in INNER])
 
     def invalidate(self) -> None:
         """Forget state reused between frames (the skin shader's blurred irradiance): the
@@ -673,7 +704,7 @@ class Renderer:
         gl["shadow_tex"].use(location=3)
         progs = [p for k, p in gl["progs"].items() if "SHADOWS" in k]
         if self._skin is not None:
-            progs += [self._skin.irr, self._skin.final]
+            progs += self._skin.programs
         for p in progs:
             self._set_shadow(p, gl["shadow"])
 
@@ -694,12 +725,19 @@ class Renderer:
             if name in prog:
                 prog[name].value = value
 
-    def _part(self, gl: dict, o: _GpuObject, mat: Material, tex: Any, mode: int,
+    def _draw_part(self, gl: dict, ctx: Any, o: _GpuObject, mat: Material, first: int,
+                   count: int, tex: Any, mode: int, depth_only: bool = False) -> None:
+        """Draw the part of ``o`` at index ``first`` (``count`` indices)."""
+        self._part(gl, o, mat, first, tex, mode, depth_only).render(
+            ctx.TRIANGLES, vertices=count, first=first)
+
+    def _part(self, gl: dict, o: _GpuObject, mat: Material, first: int, tex: Any, mode: int,
               depth_only: bool = False) -> Any:
-        """Set up the program for one part and return the object's vertex array for it."""
+        """Set up the program for the part of ``o`` at index ``first`` and return the
+        object's vertex array for it."""
         textured = tex is not None
         wrinkled = (self._wr is not None and o.face_vbo is not None
-                    and mat.name in SKIN_LIKE)
+                    and mat.name in SKIN_LIKE and first not in o.smooth)
         prog = self._program(gl, textured, textured and mat.model == "hair",
                              textured and depth_only, wrinkled)
         self._set_material(prog, mat, tex, mode)
@@ -817,7 +855,7 @@ class Renderer:
                 params = None if isinstance(self.skin_shader, bool) else self.skin_shader
                 self._skin = SkinShader(ctx, self._objects, uvs, lit, params,
                                         ("SHADOWS",) if self._shadows else (), ("WRINKLES",))
-                for p in (self._skin.irr, self._skin.final):
+                for p in self._skin.programs:
                     if "u_mucosa" in p:
                         p["u_mucosa"].value = MUCOSA
                 self._set_landmarks(self._skin.final)

@@ -68,7 +68,7 @@ class _SkinObject:
     """Skin parts of one GPU object: UV buffer, index buffers and VAOs for passes (a), (c)."""
 
     def __init__(self, ctx: Any, gpu: Any, uv: np.ndarray, raw_uv: np.ndarray,
-                 progs: tuple[Any, Any]) -> None:
+                 progs: tuple[Any, Any, Any]) -> None:
         self.gpu = gpu
         self.uv = np.ascontiguousarray(uv, np.float32)  # normalised to the skin's UV frame
         self.uv_vbo = ctx.buffer(np.ascontiguousarray(raw_uv, np.float32).tobytes())
@@ -86,9 +86,11 @@ class _SkinObject:
                 continue
             ibo = ctx.buffer(good.tobytes())
             face = [(gpu.face_vbo, "3f", "in_face")] if gpu.face_vbo is not None else []
+            # parts off the face are drawn by the program without the wrinkles
+            final = progs[2] if first in getattr(gpu, "smooth", ()) else progs[1]
             vaos = [ctx.vertex_array(p, [(gpu.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES),
                                          (self.uv_vbo, "2f", "in_uv"), *face], ibo, 4,
-                                     skip_errors=True) for p in progs]
+                                     skip_errors=True) for p in (progs[0], final)]
             self.parts[first] = (ibo, vaos[0], vaos[1], 3 * len(good))
             if self.mask is None:
                 self.mask = np.zeros(len(uv), bool)
@@ -96,8 +98,8 @@ class _SkinObject:
             if seam.any():
                 bad = np.ascontiguousarray(f[seam], np.int32)
                 ib2 = ctx.buffer(bad.tobytes())
-                vao = ctx.vertex_array(progs[1], [(gpu.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES),
-                                                  (self.uv_vbo, "2f", "in_uv"), *face], ib2,
+                vao = ctx.vertex_array(final, [(gpu.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES),
+                                               (self.uv_vbo, "2f", "in_uv"), *face], ib2,
                                        4, skip_errors=True)
                 self.rest_parts[first] = (ib2, vao, 3 * len(bad))
                 log.debug("skin: %d seam triangles of %r drawn without the blurred light",
@@ -135,7 +137,13 @@ class SkinShader:
         fd = (*defines, *final_defines)
         self.final = ctx.program(vertex_shader=_shader("skin_final.vert.glsl", *fd),
                                  fragment_shader=_shader("skin_final.frag.glsl", *fd))
-        for prog in (self.irr, self.final):
+        #: pass (c) without ``final_defines``, for parts off the face (no wrinkles there)
+        self.final_smooth = self.final if not final_defines else ctx.program(
+            vertex_shader=_shader("skin_final.vert.glsl", *defines),
+            fragment_shader=_shader("skin_final.frag.glsl", *defines))
+        #: every program of the passes that light the skin
+        self.programs = list(dict.fromkeys((self.irr, self.final, self.final_smooth)))
+        for prog in self.programs:
             set_lights(prog, lighting)
         # one UV frame for all skin parts: their bounding box → [0, 1]²
         used = []
@@ -152,13 +160,14 @@ class SkinShader:
         pad = 0.01 * span
         lo, span = lo - pad, span + 2 * pad
         self.uv_xform = (float(lo[0]), float(lo[1]), float(1 / span[0]), float(1 / span[1]))
-        for prog in (self.irr, self.final):
+        for prog in self.programs:
             prog["u_uv_xform"].value = self.uv_xform
         self.objects: dict[str, _SkinObject] = {}
         for o in objects:
             if o.name in uvs:
                 raw = np.asarray(uvs[o.name], np.float64)
-                so = _SkinObject(ctx, o, (raw - lo) / span, raw, (self.irr, self.final))
+                so = _SkinObject(ctx, o, (raw - lo) / span, raw,
+                                 (self.irr, self.final, self.final_smooth))
                 if so.parts:
                     self.objects[o.name] = so
                 else:
@@ -173,8 +182,9 @@ class SkinShader:
         self.fbos = [ctx.framebuffer(color_attachments=[t]) for t in self.tex]
         self.blur_vao = ctx.vertex_array(self.blur, [])
         self.blur["u_texel"].value = (1.0 / w, 1.0 / h)
-        self.final["u_mix"].value = p.mix
-        self.final["u_roughness"].value = p.roughness
+        for prog in self.programs[1:]:
+            prog["u_mix"].value = p.mix
+            prog["u_roughness"].value = p.roughness
         self.result = self.tex[0]
         self._frame = -1
         log.debug("skin shader: %d object(s), %dx%d texels, %d passes", len(self.objects), w, h,
@@ -191,7 +201,8 @@ class SkinShader:
         p = self.params
         w, h = p.size
         vm = view_matrix.T.astype("f4").tobytes()
-        self.final["u_view"].write(vm)
+        for prog in self.programs[1:]:
+            prog["u_view"].write(vm)
         self._frame += 1
         if p.refresh > 1 and self._frame % p.refresh:
             return  # reuse the blurred irradiance of the previous frame
@@ -256,13 +267,16 @@ class SkinShader:
         return (x0, y0, x1 - x0, y1 - y0)
 
     def draw(self, ctx: Any, gpu: Any, first: int, mat: Any, proj_matrix: np.ndarray,
-             backface: float, albedo: Any = None) -> None:
+             backface: float, albedo: Any = None, wrinkles: bytes | None = None) -> None:
         """Pass (c) for one part (its seam triangles with the sharp irradiance only);
-        ``albedo``: the part's texture (RGB colour, alpha a gloss map) or None."""
+        ``albedo``: the part's texture (RGB colour, alpha a gloss map) or None; ``wrinkles``:
+        this frame's wrinkle depths (``u_wr``), None for smooth skin."""
         so = self.objects[gpu.name]
         _, _, vao_c, n = so.parts[first]
         self.result.use(location=0)
-        f = self.final
+        f = self.final_smooth if first in getattr(gpu, "smooth", ()) else self.final
+        if "u_wr" in f:
+            f["u_wr"].write(wrinkles if wrinkles is not None else bytes(4 * 28))
         f["u_irr"].value = 0
         f["u_textured"].value = albedo is not None
         if albedo is not None:
@@ -286,5 +300,5 @@ class SkinShader:
             so.release()
         self.objects = {}
         for o in (self.blur_vao, *self.fbos, self.fbo_irr, *self.tex, self.stretch,
-                  self.irr, self.blur, self.final):
+                  self.blur, *self.programs):
             o.release()
