@@ -5,6 +5,9 @@ alignment (:mod:`mimika.speech.sphinx`); every other espeak-ng language (and Eng
 pocketsphinx) through DTW against an espeak-ng rendition, below. Both then move word edges
 next to pauses onto the recording's energy (:mod:`mimika.speech.vad`), and time the words as
 written (:mod:`mimika.speech.words`). Real-speech figures: ``bench/bench_align_real.py``.
+A recording over a minute goes to pocketsphinx piece by piece, cut at pauses a DTW alignment
+of the whole finds (:mod:`mimika.speech.pieces`), so memory stays linear up to
+``max_recording`` (30 min: 5.1 GB → under 1 GB; ``bench/bench_align_memory.py``).
 
 DTW method: the recording is cut to its speech (sustained energy, ± 0.1 s), so silence, clicks
 and breaths around it cannot drag the edge words; the transcript is synthesised with espeak-ng
@@ -19,10 +22,10 @@ across the warping path.
 * Noise matching: the recording's noise floor (per mel band, 10th percentile over frames) is
   added to the level-matched reference's mel power before the log, so that silence and weak
   consonants look alike in both under additive noise.
-* DTW: symmetric step pattern (diagonal weight 2, horizontal/vertical 1.5), first on 20 ms
-  frames inside a Sakoe–Chiba band of ±(25 % + 1 s), then on 5 ms frames inside ±50 ms of the
-  coarse path. Each row is vectorised (the horizontal recursion is a running minimum), so
-  cost is O(N·W) in numpy.
+* DTW (:mod:`mimika.speech.dtw`): symmetric step pattern (diagonal weight 2,
+  horizontal/vertical 1.5), first on 20 ms frames inside a Sakoe–Chiba band of ±(25 % + 1 s),
+  then on 5 ms frames inside ±50 ms of the coarse path; past about two minutes the 20 ms level
+  is itself found through coarser ones, so memory stays linear in the recording's length.
 
 Measured on espeak speech with known timing (rate 0.8×/1.25×, pitch/voice changes, speed
 change by resampling, noise at 20/10 dB SNR): see ``bench/bench_align.py`` and docs/speech.md.
@@ -37,6 +40,7 @@ import numpy as np
 
 from mimika.errors import ParameterError
 from mimika.speech.audio import resample, valid_audio
+from mimika.speech.dtw import time_map, warp
 from mimika.speech.utterance import Phone, Sentence, Utterance, Word
 
 log = logging.getLogger(__name__)
@@ -44,13 +48,8 @@ log = logging.getLogger(__name__)
 FEAT_SR = 16000
 HOP = 0.005  #: feature hop in seconds
 WIN = 0.025
-COARSE = 4  #: fine frames per coarse frame
-RADIUS = 10  #: fine-pass half-width around the coarse path, in fine frames
-#: weight of a horizontal or vertical DTW step (a diagonal step weighs 2): above 1 it costs to
-#: stretch one signal against the other, so real speech cannot squeeze three words into 30 ms
-#: and stretch the next across a second (GRID dev, 60 utterances: 58.9 % → 73.3 % of word
-#: boundaries within 50 ms; synthetic bench p90 15.7 → 12.6 ms)
-HV_WEIGHT = 1.5
+#: feature frames computed at once (bounds the memory of the spectra of a long recording)
+BLOCK = 4096
 
 
 def _mel_filterbank(n_fft: int, sr: int, n_mels: int, fmin: float, fmax: float) -> np.ndarray:
@@ -77,12 +76,16 @@ def mel_power(audio: np.ndarray, *, sr: int, hop: float = HOP, win: float = WIN,
     a = np.append(a[0] if len(a) else 0.0, a[1:] - 0.97 * a[:-1])
     h, w = round(hop * FEAT_SR), round(win * FEAT_SR)
     n = max(1, math.ceil(len(a) / h))
-    a = np.pad(a, (w // 2, w + n * h))
-    idx = np.arange(w)[None, :] + h * np.arange(n)[:, None]
-    frames = a[idx] * np.hamming(w)[None, :]
+    a = np.pad(a, (w // 2, max(0, (n - 1) * h + w - len(a) - w // 2)))
     n_fft = 512
-    spec = np.abs(np.fft.rfft(frames, n=n_fft, axis=1)) ** 2
-    return spec @ _mel_filterbank(n_fft, FEAT_SR, n_mels, 60.0, 7600.0).T
+    fb = _mel_filterbank(n_fft, FEAT_SR, n_mels, 60.0, 7600.0).T
+    window = np.hamming(w)[None, :]
+    out = np.empty((n, n_mels))
+    for s in range(0, n, BLOCK):  # block by block: the spectra of a long recording are GBs
+        idx = np.arange(w)[None, :] + h * np.arange(s, min(n, s + BLOCK))[:, None]
+        spec = np.abs(np.fft.rfft(a[idx] * window, n=n_fft, axis=1)) ** 2
+        out[s:s + len(idx)] = spec @ fb
+    return out
 
 
 def mfcc_features(mel: np.ndarray, *, n_mfcc: int = 13) -> np.ndarray:
@@ -112,104 +115,6 @@ def _match_noise(ref: np.ndarray, rec: np.ndarray) -> np.ndarray:
     return gain * ref + noise[None, :]
 
 
-def dtw_path(x: np.ndarray, y: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """DTW between feature rows ``x`` (N, F) and ``y`` (M, F) restricted to columns
-    ``[lo[i], hi[i])`` of row *i* (both non-decreasing); Euclidean local cost, symmetric steps.
-
-    Returns the warping path, shape (L, 2) of (i, j) from (0, 0) to (N−1, M−1).
-    """
-    n, m = len(x), len(y)
-    inf = np.inf
-    ptrs: list[np.ndarray] = []
-    prev = None
-    prev_lo = 0
-    for i in range(n):
-        a, b = int(lo[i]), int(hi[i])
-        c = np.sqrt(((y[a:b] - x[i]) ** 2).sum(axis=1))
-        if prev is None:
-            d = np.cumsum(HV_WEIGHT * c) if a == 0 else np.full(b - a, inf)
-            p = np.full(b - a, 2, np.int8)
-        else:
-            ext = np.full(b - a + 1, inf)  # D_prev at columns a−1 … b−1
-            s0, s1 = max(a - 1, prev_lo), min(b, prev_lo + len(prev))
-            if s1 > s0:
-                ext[s0 - (a - 1):s1 - (a - 1)] = prev[s0 - prev_lo:s1 - prev_lo]
-            diag = ext[:-1] + 2 * c
-            vert = ext[1:] + HV_WEIGHT * c
-            bmin = np.minimum(diag, vert)
-            s = np.cumsum(HV_WEIGHT * c)
-            with np.errstate(invalid="ignore"):
-                d = s + np.minimum.accumulate(bmin - s)
-            d = np.where(np.isnan(d), inf, d)
-            p = np.where(diag <= vert, 0, 1).astype(np.int8)
-            p[d < bmin - 1e-9] = 2
-        ptrs.append(p)
-        prev, prev_lo = d, a
-    if not np.isfinite(prev[m - 1 - prev_lo]):
-        raise ParameterError("alignment failed: the recording and transcript cannot be matched")
-    i, j = n - 1, m - 1
-    path = [(i, j)]
-    while i > 0 or j > 0:
-        step = ptrs[i][j - int(lo[i])]
-        if step == 0:
-            i, j = i - 1, j - 1
-        elif step == 1:
-            i -= 1
-        else:
-            j -= 1
-        if i < 0 or j < 0:
-            break
-        path.append((i, j))
-    return np.array(path[::-1])
-
-
-def _band(n: int, m: int, width: int) -> tuple[np.ndarray, np.ndarray]:
-    centre = np.arange(n) * (m - 1) / max(n - 1, 1)
-    lo = np.clip(np.floor(centre - width), 0, m - 1).astype(int)
-    hi = np.clip(np.ceil(centre + width) + 1, 1, m).astype(int)
-    lo[0], hi[-1] = 0, m
-    return lo, hi
-
-
-def warp(ref_feat: np.ndarray, rec_feat: np.ndarray) -> np.ndarray:
-    """Two-pass DTW (coarse band, then fine around the coarse path); path shape (L, 2)."""
-    n, m = len(ref_feat), len(rec_feat)
-
-    def pool(f):
-        k = len(f) // COARSE * COARSE
-        g = f[:k].reshape(-1, COARSE, f.shape[1]).mean(axis=1)
-        return g if k == len(f) else np.vstack([g, f[k:].mean(axis=0)])
-
-    cx, cy = pool(ref_feat), pool(rec_feat)
-    width = int(0.25 * max(len(cx), len(cy)) + 1.0 / (HOP * COARSE))
-    cpath = dtw_path(cx, cy, *_band(len(cx), len(cy), width))
-    lo = np.full(n, m, int)
-    hi = np.zeros(n, int)
-    for ci, cj in cpath:
-        r0, r1 = ci * COARSE, min(n, (ci + 1) * COARSE)
-        lo[r0:r1] = np.minimum(lo[r0:r1], cj * COARSE - RADIUS)
-        hi[r0:r1] = np.maximum(hi[r0:r1], (cj + 1) * COARSE + RADIUS)
-    lo = np.clip(np.minimum.accumulate(lo[::-1])[::-1], 0, m - 1)
-    hi = np.clip(np.maximum.accumulate(hi), 1, m)
-    lo[0], hi[-1] = 0, m
-    return dtw_path(ref_feat, rec_feat, lo, hi)
-
-
-def time_map(path: np.ndarray, *, hop: float = HOP) -> tuple[np.ndarray, np.ndarray]:
-    """Monotone piecewise-linear map ref time → recording time from a DTW path:
-    knots at ref frame edges ``(i − ½)·hop`` mapped to the middle of the recording frames
-    between ``max j(i−1)`` and ``min j(i)``. Returns ``(ref_knots, rec_knots)`` in seconds."""
-    i, j = path[:, 0], path[:, 1]
-    n = int(i.max()) + 1
-    jmin = np.full(n, np.iinfo(np.int64).max)
-    jmax = np.full(n, -1)
-    np.minimum.at(jmin, i, j)
-    np.maximum.at(jmax, i, j)
-    ref = (np.arange(1, n) - 0.5) * hop
-    rec = (jmax[:-1] + jmin[1:]) * 0.5 * hop
-    return ref, np.maximum.accumulate(rec)
-
-
 ENGINES = ("auto", "sphinx", "dtw")
 #: recording kept around the detected speech before DTW (s)
 MARGIN = 0.1
@@ -232,9 +137,9 @@ def _dtw_phones(a: np.ndarray, sr: int, transcript: str, lang: str, voice: str |
     rec_mel = mel_power(rec, sr=sr)
     x = mfcc_features(_match_noise(ref_mel, rec_mel))
     y = mfcc_features(rec_mel)
-    path = warp(x, y)
+    path = warp(x, y, hop=HOP)
     cost = float(np.sqrt(((x[path[:, 0]] - y[path[:, 1]]) ** 2).sum(axis=1)).mean())
-    knots_ref, knots_rec = time_map(path)
+    knots_ref, knots_rec = time_map(path, hop=HOP)
 
     def mp(t: float) -> float:
         return float(np.clip(c0 + np.interp(t - r0, knots_ref, knots_rec), 0.0, dur))
@@ -281,6 +186,58 @@ def _sphinx_phones(a: np.ndarray, sr: int, toks, lang: str, act: np.ndarray
     return out, own
 
 
+def _word_spans(phones: list[Phone], owner: list[int], n: int) -> np.ndarray:
+    """(start, end) of each of ``n`` words from its phones; a word without phones sits where
+    the word before it ends."""
+    spans = np.full((n, 2), np.nan)
+    for p, o in zip(phones, owner, strict=True):
+        if o >= 0:
+            if np.isnan(spans[o, 0]):
+                spans[o, 0] = p.start
+            spans[o, 1] = p.end
+    end = 0.0
+    for k in range(n):
+        if np.isnan(spans[k, 0]):
+            spans[k] = end
+        end = spans[k, 1]
+    return spans
+
+
+def _sphinx_long(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice: str | None,
+                 act: np.ndarray, *, strict: bool) -> tuple[list[Phone], list[int], dict]:
+    """pocketsphinx on a long recording, piece by piece (:mod:`mimika.speech.pieces`: cut at
+    pauses found with a DTW alignment of the whole), so its memory stays bounded; a piece it
+    cannot align keeps the DTW phones (``strict``: raises instead)."""
+    from mimika.speech import pieces
+    from mimika.speech.vad import HOP as ACT_HOP
+    from mimika.speech.words import as_read, assign_phones
+
+    dphones, _ = _dtw_phones(a, sr, as_read(transcript), lang, voice, act)
+    downer = assign_phones(dphones, toks, lang=lang)
+    spans = _word_spans(dphones, downer, len(toks))
+    cuts = [round(t * sr) for t in pieces.cut_times(spans, act, len(a) / sr)]
+    bounds = [0, *cuts, len(a)]
+    parts, fallbacks = [], 0
+    for k, words in enumerate(pieces.assign(spans, [c / sr for c in cuts])):
+        k0, k1 = bounds[k], bounds[k + 1]
+        t0, t1 = k0 / sr, k1 / sr
+        if not words:
+            parts.append(([Phone("_", t0, t1)], [-1]))
+            continue
+        try:
+            ps, own = _sphinx_phones(a[k0:k1], sr, [toks[i] for i in words], lang,
+                                     act[round(t0 / ACT_HOP):round(t1 / ACT_HOP)])
+            parts.append(pieces.shift(ps, own, t0, words.start))
+        except ParameterError as e:
+            if strict:
+                raise
+            log.warning("%s (%.1f–%.1f s); that piece keeps its DTW alignment", e, t0, t1)
+            fallbacks += 1
+            parts.append(pieces.clip(dphones, downer, t0, t1))
+    phones, owner = pieces.join(parts)
+    return phones, owner, {"pieces": len(parts), "dtw_pieces": fallbacks}
+
+
 def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
           voice: str | None = None, engine: str = "auto") -> Utterance:
     """Phoneme/word/sentence timing of a recording of ``transcript``.
@@ -307,7 +264,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
         ``audio``/``sr`` are the recording's; phones tile it; words are the transcript's
         written words; ``meta["engine"]`` says which engine ran.
     """
-    from mimika.speech import espeak, sphinx
+    from mimika.speech import espeak, pieces, sphinx
     from mimika.speech.tts import split_sentences
     from mimika.speech.vad import activity, pad, refine_edges, unpad
     from mimika.speech.words import Token, as_read, assign_phones, tokens
@@ -329,7 +286,12 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     meta: dict = {"source": "alignment"}
     if use == "sphinx":
         try:
-            phones, owner = _sphinx_phones(a, int(sr), toks, code, act)
+            if len(a) / sr > pieces.PIECE:
+                phones, owner, more = _sphinx_long(a, int(sr), transcript, toks, code, voice,
+                                                   act, strict=engine == "sphinx")
+                meta.update(more)
+            else:
+                phones, owner = _sphinx_phones(a, int(sr), toks, code, act)
         except ParameterError as e:
             if engine == "sphinx":
                 raise
