@@ -25,6 +25,7 @@ from collections.abc import Collection, Mapping
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from mimika.errors import DataError
 from mimika.face.head import Head, MeshObject, Part, Texture
@@ -363,10 +364,12 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     verts = [frame.apply(pc.mesh.vertices) for pc in parts]
     feats = {"eye_L": frame.features.eye_L, "eye_R": frame.features.eye_R,
              "mouth": frame.features.mouth, "chin": lm_pts[8]}
-    box = (verts[face_i].min(0), verts[face_i].max(0))
+    skin_v = verts[face_i]
+    above = skin_v[skin_v[:, 1] > lm_pts[8, 1]]
+    tree = cKDTree(skin_v)
     for pc, v in zip(parts, verts, strict=True):
         if pc.role is None:
-            pc.role = geometry_role(v, feats, box)
+            pc.role = geometry_role(v, tree.query(v)[0], feats, (above.min(0), above.max(0)))
     # eyes: one piece per eye, turning about its bone or sphere centre
     bone_at = {b: frame.apply(scene.node_position(b)) for b in eye_bones}
     split: list[Piece] = []

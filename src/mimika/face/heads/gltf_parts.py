@@ -28,13 +28,14 @@ EYE_RADIUS, EYE_RMS = (0.7, 2.0), 0.15
 
 @dataclass
 class Piece:
-    """One head object to be: its mesh (file units), the scene mesh it came from, its name
-    and role (None until found)."""
+    """One head object to be: its mesh (file units), the scene mesh it came from, its name,
+    role (None until found) and whether it is that whole mesh."""
 
     mesh: SceneMesh
     src: int
     name: str
     role: Role | None
+    whole: bool = True
 
 
 def _eye_weight(m: SceneMesh, eye_bones: Collection[int]) -> np.ndarray | None:
@@ -65,12 +66,12 @@ def pieces(scene: GltfScene, eye_bones: Collection[int]) -> list[Piece]:
         return base if names[base] == 1 else f"{base}.{names[base] - 1}"
 
     for i, m in enumerate(scene.meshes):
-        whole = mesh_role(m, scene, eye_bones)
+        mesh_r = mesh_role(m, scene, eye_bones)
         prim = [name_role(scene.materials[k].name, what="material")
                 if 0 <= k < len(scene.materials) else None for k, _ in m.primitives]
-        if whole is not None and whole.how.startswith("skinned"):
+        if mesh_r is not None and mesh_r.how.startswith("skinned"):
             prim = [None] * len(prim)
-        roles = [(r or whole) for r in prim]
+        roles = [(r or mesh_r) for r in prim]
         groups = split_groups(r.role if r else None for r in roles)
         if len(groups) == 1:
             role = next((r for r in roles if r is not None), None)
@@ -83,7 +84,7 @@ def pieces(scene: GltfScene, eye_bones: Collection[int]) -> list[Piece]:
             how = next((roles[k].how for k in ids if roles[k] is not None), "")
             name = m.name if g == main else f"{m.name}.{g or 'part'}"
             out.append(Piece(m.subset([m.primitives[k] for k in ids], name), i, unique(name),
-                             Role(g, how) if g else None))
+                             Role(g, how) if g else None, whole=False))
     return out
 
 
@@ -95,21 +96,24 @@ def split_sides(p: Piece, x: np.ndarray) -> list[Piece]:
     if all(s.all() for _, s, _ in sides) or not any(s.any() for _, s, _ in sides):
         return [p]
     return [Piece(m.subset([(k, f[s == left]) for k, s, f in sides if (s == left).any()],
-                           f"{m.name}.{side}"), p.src, f"{p.name}.{side}", p.role)
+                           f"{m.name}.{side}"), p.src, f"{p.name}.{side}", p.role, p.whole)
             for side, left in (("L", True), ("R", False))]
 
 
 def eye_pivot(p: Piece, v: np.ndarray, scene: GltfScene, eye_bones: Mapping[int, np.ndarray]
               ) -> np.ndarray | None:
     """Where an eye piece turns (head frame, cm): its eye bone when the skin holds it there
-    (or it hangs under the bone), else the centre of the sphere it is, or None when it is no
-    sphere (a flat iris without a bone does not turn)."""
+    (or it hangs under the bone), else the centre of the sphere it is. None — it does not
+    turn — for a part of a face mesh that no eye bone holds in a file with eye bones
+    (VRoid's eye whites) and for a piece that is no sphere (a flat iris without a bone)."""
     m = p.mesh
     for b, pos in eye_bones.items():
         held = m.joints is not None and np.mean(
             np.where(m.joints == b, m.weights, 0.0).sum(1) > 0.5) > 0.5
         if held or m.node in scene.descendants(b):
             return pos
+    if eye_bones and not p.whole:
+        return None
     c, r = sphere_fit(v)
     rms = float(np.sqrt(np.mean((np.linalg.norm(v - c, axis=1) - r) ** 2)))
     return c if EYE_RADIUS[0] <= r <= EYE_RADIUS[1] and rms <= EYE_RMS else None

@@ -279,7 +279,7 @@ def _materials(r: _Reader) -> list[SceneMaterial]:
         col = tuple(float(c) for c in (pbr.baseColorFactor if pbr and pbr.baseColorFactor
                                        else (1, 1, 1, 1)))
         bct = pbr.baseColorTexture.index if pbr and pbr.baseColorTexture else None
-        if bct is None and i in toon:  # VRM 0.x: MToon's own colour and texture
+        if pbr is None and i in toon:  # VRM 0.x without PBR: MToon's colour and texture
             vcol, bct = vrm0_base_color(r.g, i)
             col = vcol or col
         nt = m.normalTexture.index if m.normalTexture else None

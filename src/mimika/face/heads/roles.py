@@ -90,34 +90,47 @@ def objects_of_role(head, role: str) -> list[str]:
     return [o.name for o in head.objects if o.name == role]
 
 
-def geometry_role(v: np.ndarray, features: Mapping[str, np.ndarray],
-                  skin_box: tuple[np.ndarray, np.ndarray]) -> Role:
-    """The role of an object no name explains, from its vertices ``v`` (cm, head frame), the
-    eye and mouth points (``eye_L``, ``eye_R``, ``mouth``, ``chin``) and the skin's bounds:
-    a small round piece at an eye is an eye, one behind the mouth teeth, a thin piece across
-    both eyes in front of them glasses, a cap over the crown hair, anything reaching far
-    below the chin body; else skin."""
+#: a piece whose median distance to the skin is below this (cm) lies on it (brows, lashes)
+ON_SKIN_CM = 0.6
+
+
+def geometry_role(v: np.ndarray, skin_dist: np.ndarray, features: Mapping[str, np.ndarray],
+                  head_box: tuple[np.ndarray, np.ndarray]) -> Role:
+    """The role of an object no name explains, from its vertices ``v`` (cm, head frame),
+    their distances to the skin, the eye, mouth and chin points (``eye_L``, ``eye_R``,
+    ``mouth``, ``chin``) and the bounds of the head above the chin: a small round piece at
+    an eye is an eye, one behind the mouth teeth; a piece on the skin is brows above the
+    eyes, lashes at them, beard below the mouth; a thin piece across both eyes in front of
+    them glasses, a cap over the crown hair, anything reaching far below the chin body;
+    else skin."""
     lo, hi = v.min(0), v.max(0)
-    ext = hi - lo
-    c = v.mean(0)
+    ext, c = hi - lo, v.mean(0)
     eye_l, eye_r = np.asarray(features["eye_L"]), np.asarray(features["eye_R"])
     mouth, chin = np.asarray(features["mouth"]), np.asarray(features["chin"])
     eye_d = float(np.linalg.norm(eye_l - eye_r))
     eye_y, eye_z = 0.5 * (eye_l[1] + eye_r[1]), max(eye_l[2], eye_r[2])
+    on_skin = float(np.median(skin_dist)) < ON_SKIN_CM
     if ext.max() < 0.7 * eye_d and min(np.linalg.norm(c - eye_l), np.linalg.norm(c - eye_r)) \
             < 0.3 * eye_d:
         return Role("eyes", "shape: a small piece at an eye")
-    if ext.max() < 1.2 * eye_d and abs(c[0] - mouth[0]) < 0.4 * eye_d and \
-            abs(c[1] - mouth[1]) < 0.4 * eye_d and c[2] < mouth[2]:
+    if ext.max() < 1.3 * eye_d and abs(c[0] - mouth[0]) < 0.4 * eye_d and \
+            abs(c[1] - mouth[1]) < 0.7 * eye_d and c[2] < mouth[2] and not on_skin:
         return Role("teeth", "shape: a small piece behind the mouth")
-    if ext[0] > 1.3 * eye_d and ext[1] < 1.3 * eye_d and abs(c[1] - eye_y) < 0.5 * eye_d \
-            and np.median(v[:, 2]) > eye_z:
-        return Role("glasses", "shape: a thin piece across both eyes, in front of them")
     if lo[1] < chin[1] - 3.5 * eye_d:
         return Role("body", "shape: reaches far below the chin")
-    skin_lo, skin_hi = skin_box
-    if c[1] > eye_y + 0.3 * eye_d and hi[1] > skin_hi[1] - 0.3 * eye_d and \
-            ext[0] > 0.6 * (skin_hi[0] - skin_lo[0]):
+    if on_skin and ext[1] < 0.6 * eye_d:
+        if eye_y + 0.15 * eye_d < c[1] < eye_y + 0.7 * eye_d:
+            return Role("brows", "shape: on the skin above the eyes")
+        if abs(c[1] - eye_y) <= 0.15 * eye_d:
+            return Role("lashes", "shape: on the skin at the eyes")
+    if on_skin and c[1] < mouth[1] and hi[1] < eye_y:
+        return Role("beard", "shape: on the skin below the mouth")
+    if not on_skin and ext[0] > 1.3 * eye_d and ext[1] < 1.3 * eye_d and \
+            abs(c[1] - eye_y) < 0.5 * eye_d and np.median(v[:, 2]) > eye_z:
+        return Role("glasses", "shape: a thin piece across both eyes, in front of them")
+    box_lo, box_hi = head_box
+    if c[1] > eye_y + 0.3 * eye_d and hi[1] > box_hi[1] - 0.3 * eye_d and \
+            ext[0] > 0.6 * (box_hi[0] - box_lo[0]):
         return Role("hair", "shape: a cap over the crown")
     return Role("skin", "shape: on the face")
 
