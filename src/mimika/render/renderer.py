@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from mimika.errors import ParameterError, RenderError
-from mimika.face.head import Head, MeshObject
+from mimika.face.head import Head, MeshObject, Part
 from mimika.render.camera import Camera, check_view, frame_head
 from mimika.render.context import get_context, render_lock
 from mimika.render.lighting import Lighting, parse_light, set_lights, unit
@@ -874,12 +874,23 @@ class Renderer:
 
 def _in_shot(obj: MeshObject, cam: Camera, size: tuple[int, int]) -> MeshObject:
     """``obj`` without the triangles whose rest-pose corners all lie more than a quarter of
-    the image outside ``cam``'s view (corners behind the camera count as in view)."""
+    the image outside ``cam``'s view (corners behind the camera count as in view). Opaque
+    two-sided parts (clothes) get their triangles sorted front to back: the far side of a
+    garment then fails the depth test instead of being shaded and covered (one-sided parts
+    keep their order, which reuses more of the shaded vertices)."""
     clip = np.c_[obj.vertices, np.ones(obj.n_vertices)] @ (
         cam.projection_matrix @ cam.view_matrix).T
     ndc = clip[:, :2] / np.where(clip[:, 3:] > 0, clip[:, 3:], 1.0)
     # a quarter of the image beyond each edge is 1.5 in normalised device coordinates
     out = (clip[:, 3] > 0) & (np.abs(ndc) > 1.5).any(axis=1)
-    parts = (replace(p, faces=p.faces[~out[p.faces].all(axis=1)]) for p in obj.parts)
+
+    def kept(p: Part) -> Part:
+        f = p.faces[~out[p.faces].all(axis=1)]
+        m = material(p.material)
+        if p.alpha_mode == "opaque" and m.alpha >= 1.0 and not m.cull:
+            f = f[np.argsort(clip[f, 3].min(axis=1), kind="stable")]
+        return replace(p, faces=f)
+
+    parts = (kept(p) for p in obj.parts)
     return replace(obj, parts=tuple(p for p in parts if len(p.faces)))
 
