@@ -268,6 +268,28 @@ def test_lashes_are_fine_strokes_not_bands(daniel):
 
 
 @needs_anny
+@pytest.mark.parametrize("asset", ["eyelashes01", "eyelashes02", "eyelashes03", "eyelashes04"])
+def test_every_lash_row_is_drawn_as_separate_hairs(asset):
+    """No lash card is smeared into solid bands (a row that curls around the eye folded its
+    along-the-row coordinate back on itself: mascara blobs on eyelashes02-04)."""
+    from mimika.face.makehuman.build import Outfit, build
+    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.paint.regions import uv_islands
+
+    c = replace(load_character_spec("daniel"), eyelashes=asset)
+    piece = next(p for p in build(c.phenotype_values(), Outfit(None, None, asset, ())).pieces
+                 if p.name == "lashes")
+    img = strokes.paint_strokes(piece, c, "lash")
+    tris = np.concatenate(list(piece.parts.values()))
+    at = rasterize(piece.uvs, tris, img.shape[1::-1])
+    a = img.reshape(-1, 4)[at.texels, 3] / 255.0
+    card = uv_islands(tris, len(piece.uvs))[tris[at.faces_at(), 0]]
+    for k in np.unique(card):
+        assert (a[card == k] > 0.9).mean() < 0.15, (asset, k)  # hairs with gaps, no bands
+        assert (a[card == k] > 0.3).mean() > 0.01, (asset, k)  # … and hairs there are
+
+
+@needs_anny
 def test_paint_is_deterministic(daniel):
     c, pieces = daniel
     a = strokes.paint_strokes(pieces["brows"], c, "brow")

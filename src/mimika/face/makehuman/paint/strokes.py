@@ -58,6 +58,20 @@ def _across(pos: np.ndarray, tris: np.ndarray, s: np.ndarray, up: np.ndarray
     return t, float(np.median((d0 + d1)[np.isfinite(d0 + d1)]))
 
 
+def _along(pos: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """Per vertex of a card: the share of the way from one end to the other (ends: the
+    extremes along its longest axis), by geodesic distances over its edges. (An angle around
+    the eyeball folds back on lash rows that curl, smearing hairs into bands.)"""
+    n = len(pos)
+    e = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
+    w = np.linalg.norm(pos[e[:, 0]] - pos[e[:, 1]], axis=1)
+    g = sp.coo_matrix((w, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    axis = np.linalg.svd(pos - pos.mean(0), full_matrices=False)[2][0]
+    x = pos @ axis
+    d0, d1 = dijkstra(g, directed=False, indices=[int(x.argmin()), int(x.argmax())])
+    return d0 / np.maximum(d0 + d1, 1e-9)
+
+
 def _cards(pos: np.ndarray, tris: np.ndarray, lab: np.ndarray, kind: str):
     """Per island: (vertex ids, s, t, length cm, height cm, is_lower) in card coordinates."""
     out = []
@@ -79,13 +93,11 @@ def _cards(pos: np.ndarray, tris: np.ndarray, lab: np.ndarray, kind: str):
             up, lower = p[:, 1], False
         else:
             side = 1 if p[:, 0].mean() > 0 else -1
-            d = p - eyes[side]
             lower = bool(p[:, 1].mean() < eyes[side][1])
-            ang = np.arctan2(d[:, 1], d[:, 0] * side)
-            s = (ang - ang.min()) / max(np.ptp(ang), 1e-6)
+            s = _along(p, ltris)
             if np.corrcoef(s, ax)[0, 1] < 0:
                 s = 1.0 - s  # s grows away from the nose
-            up = np.linalg.norm(d, axis=1)  # roots on the lid, tips farther out
+            up = np.linalg.norm(p - eyes[side], axis=1)  # roots on the lid, tips farther out
         t, height = _across(p, ltris, s, up)
         order = np.argsort(s)
         length = float(np.linalg.norm(np.diff(p[order], axis=0), axis=1).sum())
