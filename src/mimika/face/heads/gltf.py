@@ -395,6 +395,10 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     anchors = head_anchors(verts[face_i], lm_pts, eyes)
     if bones["head"] is not None:  # head AUs turn about the head bone
         anchors["neck_pivot"] = frame.apply(scene.node_position(bones["head"]))
+    if bones["neck"] is not None:  # the neck bone's root is where the neck starts to bend
+        neck = frame.apply(scene.node_position(bones["neck"]))
+        if neck[1] < anchors["chin"][1]:
+            anchors["neck_base"] = neck
     weight = _head_weight(scene, parts, verts, bones, anchors)
     roles = {pc.name: pc.role.role for pc in parts}
     body = any(role_category(r) == "body" for r in roles.values()) or bool(

@@ -6,7 +6,9 @@ axes, at its rest pose: node transforms applied, skinned meshes placed by their 
 (linear-blend skinning with the bind matrices, so a bind pose that differs from the rest
 pose is honoured), morph target deltas mapped by the same linear part. Materials keep their
 base colour, base-colour / normal textures (decoded to uint8 arrays) and alpha mode. VRM
-0.x (``VRM``) and 1.0 (``VRMC_vrm``) humanoid bones and expression presets are read too.
+0.x (``VRM``) and 1.0 (``VRMC_vrm``) humanoid bones, expressions, lookAt ranges and MToon
+materials are read by :mod:`.vrm`. Skinned meshes keep their bind data (:class:`SkinBind`)
+so they can be posed again (:mod:`.gltf_pose`).
 """
 
 from __future__ import annotations
