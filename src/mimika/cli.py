@@ -10,6 +10,7 @@ import argparse
 import difflib
 import importlib
 import os
+import re
 import signal
 import sys
 import threading
@@ -69,7 +70,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except MimikaError as e:
         if args.debug:
             raise
-        print(f"mimika: error: {e}", file=sys.stderr)
+        # one line, whatever a library's text inside the message held
+        print("mimika: error: " + re.sub(r"\s*[\r\n]+\s*", " ", str(e).strip()),
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("mimika: interrupted", file=sys.stderr)

@@ -355,11 +355,17 @@ def loads_json(text: str | bytes, source: str = "<json>", *, check: bool = True)
         data = json.loads(text, parse_int=parse_int, parse_float=parse_float,
                           parse_constant=parse_constant)
     except json.JSONDecodeError as e:
-        raise DataError(f"{source}:{e.lineno}:{e.colno}: invalid JSON: {e.msg}") from None
+        from mimika.io.hints import json_hint
+
+        hint = json_hint(e)
+        raise DataError(f"{source}:{e.lineno}:{e.colno}: invalid JSON: {e.msg}"
+                        + (f"; {hint}" if hint else "")) from None
     except RecursionError:
         raise DataError(f"{source}: nested deeper than {lim.max_depth} levels (max_depth); "
                         f"{how_to_raise('max_depth')}") from None
     problems = check_json_tree(data, lim=lim) if check else []
     if problems:
-        raise DataError(f"{source}: {problems[0]}")
+        from mimika.io.jsonpos import where
+
+        raise DataError(f"{where(text, source, problems[0])}: {problems[0]}")
     return data

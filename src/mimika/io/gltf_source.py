@@ -141,8 +141,8 @@ def read_beside(path: Path, uri: str, where: str) -> bytes:
         real = target.resolve(strict=True)
         st = real.stat()
     except (OSError, RuntimeError):
-        raise DataError(f"{path}: {where}: {uri!r} is not beside the file; copy it next to "
-                        f"{path.name} or pack a .glb") from None
+        raise DataError(f"{path}: the file of {where}, {uri!r}, is missing; copy it next to "
+                        f"{path.name} (or export one .glb, which holds it)") from None
     if not real.is_relative_to(folder):
         raise DataError(f"{path}: {where}: {uri!r} leads out of the file's folder (a link); "
                         "copy the real file beside it")

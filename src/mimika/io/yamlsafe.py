@@ -17,6 +17,7 @@ from typing import Any
 
 from mimika import limits
 from mimika.errors import DataError
+from mimika.io.hints import yaml_hint
 
 Path_ = tuple[str | int, ...]
 _INT_TAG = "tag:yaml.org,2002:int"
@@ -130,7 +131,9 @@ def read_yaml(text: str, source: str, *, error: type[DataError] = DataError,
             mark = getattr(e, "problem_mark", None) or getattr(e, "context_mark", None)
             where = f"{source}:{mark.line + 1}:{mark.column + 1}" if mark else source
             problem = getattr(e, "problem", None) or str(e).splitlines()[0]
-            raise error(f"{where}: invalid YAML: {problem}") from None
+            hint = yaml_hint(e)
+            raise error(f"{where}: invalid YAML: {problem}" + (f"; {hint}" if hint else "")
+                        ) from None
         if root is None:
             return None, lines
         _check_expansion(yaml, root, source, lim, error)

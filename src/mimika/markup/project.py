@@ -57,12 +57,19 @@ _LANGS = ("en", "de", "pl")
 
 
 class ProjectError(DataError):
-    """Problems in a project file; ``problems`` lists ``"path: message"`` strings."""
+    """Problems in a project file; ``problems`` lists ``"path: message"`` strings. The message
+    is one line: every problem after its place (``file:line:col`` when ``text``, the file's
+    JSON, is given), separated by ``; ``."""
 
-    def __init__(self, source: str, problems: list[str]):
+    def __init__(self, source: str, problems: list[str], *, text: str | None = None):
+        from mimika.io.jsonpos import where
+
         self.problems = problems
-        head = f"{source}: {len(problems)} problem{'s' if len(problems) != 1 else ''}"
-        super().__init__(head + ":\n  " + "\n  ".join(problems))
+        parts = [f"{where(text, source, problems[0])}: {problems[0]}"]
+        for prob in problems[1:]:
+            place = where(text, source, prob)[len(source) + 1:]
+            parts.append(f"{place}: {prob}" if place else prob)
+        super().__init__("; ".join(parts))
 
 
 @dataclass(frozen=True)
@@ -363,7 +370,10 @@ def load_project(path: str | Path) -> Project:
     except (OSError, UnicodeDecodeError) as e:
         raise DataError(f"cannot read project {p}: {e}") from None
     data = loads_json(text, str(p), check=False)  # project_from_dict lists what it refuses
-    return project_from_dict(data, source=str(p))
+    try:
+        return project_from_dict(data, source=str(p))
+    except ProjectError as e:  # again, with the place of each problem in the file
+        raise ProjectError(str(p), e.problems, text=text) from None
 
 
 def save_project(project: Project, path: str | Path) -> Path:
