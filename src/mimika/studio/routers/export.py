@@ -98,6 +98,8 @@ async def export_gltf(req: ExportRequest, request: Request, job: str | None = No
     proj, frames = await run_in_threadpool(_plan, req, st)
 
     def work(j: Job) -> bytes:
+        if proj is None:
+            return st.pose_glb(req.head, req.aus or {}, fps=req.fps, label=req.name)
         track = _track(st, req, proj, j)
         j.check()
         return gltf_bytes(_rig(st, req, proj), track, name=req.name)
