@@ -418,6 +418,11 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
         else None
     rig, cover = build_rig(head, shapes, origin, head_weight=weight,
                            generator=skin_fields(roles), eye_turn=eye_turn)
+    if not any(c is not None for c in pivots.values()):  # no eye object turns
+        for code in (c for c in EYE_AUS if c in cover):
+            src, how = cover[code]
+            cover[code] = (src, how.replace("eye rotation + ", "").replace(
+                "eye rotation", "no eye object turns"))
     head.meta["coverage"] = cover
     log.info("%s: %s; %d of its morphs used", p, frame.describe(),
              sum(r["kind"] not in ("unused", "duplicate", "empty", "eye turn") for r in rows))
