@@ -180,18 +180,22 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, skin_w: sp.csr_matrix,
     return moved
 
 
-def lift_layers(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray) -> int:
-    """Lift the cloth islands that cross others clear of them, in place, as seen in the rest
-    pose (:func:`.layers.layer_offsets`); the moves are carried back to bind space through
+def settle_cloth(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: np.ndarray,
+                 body_tris: np.ndarray) -> int:
+    """Make a fitted garment lie right, in place, as seen in the rest pose (bone transforms
+    ``pose``): vertices sunk into the body (``body``, the posed base mesh, whose ``body_tris``
+    are the whole body, hidden parts included) rest on it, then panels that cross others are
+    lifted clear of them (:mod:`.layers`). The moves are carried back to bind space through
     each vertex's blended rotation. Returns how many positions moved."""
-    from mimika.face.makehuman.layers import layer_offsets, welded
+    from mimika.face.makehuman.layers import layer_offsets, lift_over, welded
     from mimika.face.makehuman.paint.regions import uv_islands
 
     tris = np.concatenate(list(cloth.parts.values()))
     islands = uv_islands(tris, len(cloth.vertices))[tris[:, 0]]
     posed = skin(cloth.vertices.astype(np.float64), weights, pose)
     pos, wtris, inv = welded(posed, tris)
-    move = layer_offsets(pos, wtris, islands)
+    move = lift_over(pos, wtris, body, body_tris)
+    move += layer_offsets(pos + move, wtris, islands)
     moved = np.flatnonzero(np.abs(move).max(1) > 0)
     if not len(moved):
         return 0
@@ -201,8 +205,27 @@ def lift_layers(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray) -> int:
     bind = cloth.vertices.astype(np.float64)
     bind[sel] += np.linalg.solve(rot[sel], step[sel][:, :, None])[:, :, 0]
     cloth.vertices = bind.astype(np.float32)
-    log.debug("%s: %d positions lifted clear of other layers", cloth.name, len(moved))
+    log.debug("%s: %d positions settled on the body and clear of other layers", cloth.name,
+              len(moved))
     return len(moved)
+
+
+def blend_cloth_weights(cloth: Piece, weights: sp.csr_matrix, radius: float = 0.15
+                        ) -> sp.csr_matrix:
+    """Skin weights of a garment averaged over ``radius`` (base units) in space, so panels
+    lying on each other (a collar wing on the jacket, a lapel on the front) bend alike and do
+    not slide through each other when the head turns; the fitted weights (from the body under
+    each vertex) differ between such layers. Each row is renormalised and cut to
+    :data:`MAX_INFLUENCES`."""
+    from scipy.spatial import cKDTree
+
+    v = cloth.vertices.astype(np.float64)
+    tree = cKDTree(v)
+    d = tree.sparse_distance_matrix(tree, radius, output_type="coo_matrix")
+    k = sp.csr_matrix((1.0 - d.data / radius, (d.row, d.col)), shape=(len(v), len(v)))
+    k = k + sp.identity(len(v), format="csr")
+    k = sp.diags(1.0 / np.asarray(k.sum(1)).ravel()) @ k
+    return top_influences(sp.csr_matrix(k @ weights))
 
 
 #: skin influences per vertex (what glTF players and game engines take)
@@ -249,7 +272,7 @@ class Built:
 
 def _skin_piece(base: BaseMesh, verts: np.ndarray, hidden: np.ndarray) -> Piece:
     body = base.faces_of("body")
-    keep = ~np.all(np.isin(base.quads[body], hidden), axis=1)
+    keep = ~np.any(np.isin(base.quads[body], hidden), axis=1)
     quads = base.quads[body][keep]
     src, uv, tris = split_by_uv(quads, base.quad_uvs[body][keep], base.uvs)
     n = len(verts)
@@ -309,7 +332,12 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
     rest = skel.transforms(rest_pose(skel))
     for p in pieces:
         if p.category == "body":
-            lift_layers(p, weights[p.name], rest)
+            weights[p.name] = blend_cloth_weights(p, weights[p.name])
+    body = skin(verts, top_influences(skel.weights), rest)
+    body_tris = triangulate(base.quads[base.faces_of("body")])
+    for p in pieces:
+        if p.category == "body":
+            settle_cloth(p, weights[p.name], rest, body, body_tris)
     for p in pieces:
         if p.category == "body":
             tuck_under(pieces[0], p, skin_w=weights["skin"], cloth_w=weights[p.name],

@@ -103,7 +103,6 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
     v = np.asarray(v, np.float64)
     move = np.zeros_like(v)
     n = len(v)
-    avg = _neighbour_mean(tris, n)
     member = _island_of_vertex(tris, islands, n)
     key = np.arange(n)
     order: dict[tuple[int, int], int] = {}
@@ -137,14 +136,46 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
             direction[sel] = fn[better]
         if not lift.any():
             break
-        # spread the lift over a few rings so the panel bends instead of creasing
-        d = lift[:, None] * direction
-        w = (lift > 0).astype(float)
-        for _ in range(spread):
-            d = np.where(w[:, None] > 0, d, 0.5 * (avg @ d))
-            w = np.maximum(w, (avg @ w > 0).astype(float))
-        move += d
+        move += _spread(lift, direction, tris, n, spread)
     return move
+
+
+def lift_over(v: np.ndarray, tris: np.ndarray, body_v: np.ndarray, body_t: np.ndarray, *,
+              margin: float = 0.05, depth: float = 0.3, reach: float = 0.1,
+              fade: float = 0.2) -> np.ndarray:
+    """Moves (N, 3) that lift a garment (welded ``v``, ``tris``) off the body (``body_v``,
+    ``body_t``) where it sinks into it or lies within ``margin`` of it, so that it rests
+    ``margin`` above it. The lift is a field over space, not per vertex: every cloth vertex
+    within ``reach`` of a sunk one rises as much, fading out over ``fade`` beyond — so the
+    layers of a collar or a lapel rise together and keep their order. Vertices deeper than
+    ``depth`` are left alone (they lie past another part of the body, not under it)."""
+    v = np.asarray(v, np.float64)
+    h, fn, over = height_above(v, np.asarray(body_v, np.float64), body_t)
+    need = np.flatnonzero(over & (h < margin) & (h > -depth))
+    if not len(need):
+        return np.zeros_like(v)
+    lift = margin - h[need]
+    amount = np.zeros(len(v))
+    kd = cKDTree(v[need])
+    for i, near in enumerate(kd.query_ball_point(v, reach + fade)):
+        if near:
+            d = np.linalg.norm(v[need[near]] - v[i], axis=1)
+            w = np.clip((reach + fade - d) / fade, 0.0, 1.0)
+            amount[i] = float(np.max(lift[near] * w))
+    return amount[:, None] * fn
+
+
+def _spread(lift: np.ndarray, direction: np.ndarray, tris: np.ndarray, n: int,
+            rings: int) -> np.ndarray:
+    """``lift`` (n,) along ``direction`` (n, 3), carried ``rings`` rings of neighbours out
+    at half strength per ring so a surface bends instead of creasing."""
+    avg = _neighbour_mean(tris, n)
+    d = lift[:, None] * direction
+    w = (lift > 0).astype(float)
+    for _ in range(rings):
+        d = np.where(w[:, None] > 0, d, 0.5 * (avg @ d))
+        w = np.maximum(w, (avg @ w > 0).astype(float))
+    return d
 
 
 def _upper(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, member: sp.csr_matrix,
