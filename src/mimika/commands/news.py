@@ -19,6 +19,16 @@ from mimika.errors import DataError, ParameterError
 VIEWS = ("front", "three-quarter", "profile")
 
 
+def title_arg(text: str) -> str:
+    """``--title``: a name strap's text, checked now (one line and exit 2 when bad)."""
+    from mimika.render.video import check_title
+
+    try:
+        return check_title(text)
+    except ParameterError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
 def _say(args: argparse.Namespace, msg: str) -> None:
     if not args.quiet:
         print(msg)
@@ -83,7 +93,8 @@ def cmd_news(args: argparse.Namespace) -> int:
         raise ParameterError("--audio works with -o, not with --ablations")
     kw = dict(lang=lang, head=args.head, fps=args.fps, size=args.size, view=args.view,
               voice=args.voice, rate=args.rate, samples=args.samples, seed=args.seed,
-              workers=args.workers, mood=args.mood, light=args.light, engine=args.engine)
+              workers=args.workers, mood=args.mood, light=args.light, engine=args.engine,
+              shot=args.shot, title=args.title)
     if args.ablations is not None:
         def prog(name: str, done: int, total: int, _bars: dict = {}) -> None:  # noqa: B006
             bar = _bars.setdefault(name, progress_bar(args.quiet, f"{name:<18}"))
@@ -110,6 +121,7 @@ def cmd_news(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     from mimika.newsreader import FEATURES, FLAG_NAMES
+    from mimika.newsreader.pipeline import DEFAULT_SHOT, DEFAULT_SIZE, SHOT_NAMES
 
     p = sub.add_parser(
         "news", help="the virtual newsreader: an article → MP4 video with SRT subtitles",
@@ -131,9 +143,18 @@ def register(sub: argparse._SubParsersAction) -> None:
                                   "often and how strongly the reader nods, raises brows, smiles")
     p.add_argument("--rate", type=int, default=165, help="words per minute (165)")
     p.add_argument("--fps", type=float, default=25.0, help="frames per second (25)")
-    p.add_argument("--size", type=size_arg, default=(640, 480),
-                   help="video size WxH, even numbers (640x480)")
+    size = "x".join(map(str, DEFAULT_SIZE))
+    p.add_argument("--size", type=size_arg, default=DEFAULT_SIZE,
+                   help=f"video size WxH, even numbers ({size}: HD 16:9)")
     p.add_argument("--view", choices=VIEWS, default="front", help="camera (front)")
+    p.add_argument("--shot", choices=SHOT_NAMES, default=DEFAULT_SHOT,
+                   help=f"framing of a character with a body: close (head and collar), "
+                        f"medium (a TV medium close-up: eyes on the upper third line, head a "
+                        f"third of the height, shoulders in), wide (to the desk) "
+                        f"({DEFAULT_SHOT}); a bare head is framed closer at each")
+    p.add_argument("--title", type=title_arg, metavar="TEXT",
+                   help="a lower-third name strap over the first seconds, e.g. "
+                        "'Amara Okafor — News at Nine' (name — programme)")
     p.add_argument("--samples", type=int, default=0,
                    help="multisample anti-aliasing samples (0: fastest)")
     add_light_arg(p, "news")

@@ -34,12 +34,28 @@ ABLATIONS = ("head", "gaze", "hair", "blink", "body", "skin", "brows", "idle", "
 FLAG_NAMES = {"head": "head-motion", "gaze": "gaze", "blink": "blink", "idle": "idle",
               "body": "body-idle", "brows": "brows", "smile": "smile",
               "knowledge": "knowledge", "skin": "skin-shader", "hair": "hair"}
-#: how much of the image height the face (hairline to chin) fills: a close-up of a bare head;
-#: heads with a body get a TV head-and-shoulders shot (face ``BUST_FILL`` of the height, eyes
-#: ``EYE_LINE`` of the height from the top)
-FILL = 0.62
-BUST_FILL = 0.34
-EYE_LINE = 0.37
+
+
+def _shots() -> dict[str, Any]:
+    import json
+    from importlib import resources
+
+    text = resources.files("mimika.newsreader").joinpath("data/shots.json").read_text("utf-8")
+    return {k: v for k, v in json.loads(text).items() if not k.startswith("_")}
+
+
+#: the camera shots (``data/shots.json``): heads with a body are framed by the head's share
+#: of the image height and the eyes' line; a bare head by the face's fill, centred
+SHOTS: dict[str, dict[str, float]] = _shots()["shots"]
+SHOT_NAMES = tuple(SHOTS)
+#: the shot and video size of ``mimika news`` by default: a TV medium close-up in HD
+DEFAULT_SHOT: str = _shots()["default"]
+DEFAULT_SIZE: tuple[int, int] = tuple(_shots()["size"])  # type: ignore[assignment]
+#: the default shot in the studio's terms (its viewer frames by the face, hairline to chin,
+#: which is about 0.83 of the head, crown to chin)
+FILL = SHOTS[DEFAULT_SHOT]["fill"]
+BUST_FILL = round(0.83 * SHOTS[DEFAULT_SHOT]["head"], 3)
+EYE_LINE = SHOTS[DEFAULT_SHOT]["eye_line"]
 
 Progress = Callable[[int, int], None]
 
@@ -197,26 +213,39 @@ def _check_output(out: Path) -> None:
                         "output path with -o") from None
 
 
-def news_camera(head: Any, view: str, aspect: float) -> Any:
-    """The newsreader's camera: a head-and-shoulders shot for heads with a body, else a
-    close-up of the face."""
+def check_shot(shot: str) -> dict[str, float]:
+    """The settings of the named shot, or a ParameterError naming the shots."""
+    if shot not in SHOTS:
+        raise ParameterError(f"unknown shot {shot!r}; shots: {', '.join(SHOT_NAMES)}")
+    return SHOTS[shot]
+
+
+def news_camera(head: Any, view: str, aspect: float, shot: str = DEFAULT_SHOT) -> Any:
+    """The newsreader's camera for ``shot`` (:data:`SHOTS`): for heads with a body the head
+    (crown to chin) takes its share of the image height with the eyes on its eye line (the
+    default: a TV medium close-up, eyes on the upper third line, head a third of the height,
+    shoulders in); a bare head is a centred close-up of the face."""
     from mimika.render.camera import frame_head
 
+    s = check_shot(shot)
     if any(o.category == "body" for o in head.objects) or head.meta.get("body"):
-        return frame_head(head, view, aspect=aspect, fill=BUST_FILL, eye_line=EYE_LINE)
-    return frame_head(head, view, aspect=aspect, fill=FILL)
+        return frame_head(head, view, aspect=aspect, head_share=s["head"],
+                          eye_line=s["eye_line"])
+    return frame_head(head, view, aspect=aspect, fill=s["fill"])
 
 
 def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str = "front",
                   samples: int = 0, skin_shader: bool = True, hair: bool = True,
                   chunk: int = 50, workers: int | None = 1,
-                  timings: dict[str, float] | None = None, light: Any = None):
+                  timings: dict[str, float] | None = None, light: Any = None,
+                  shot: str = DEFAULT_SHOT):
     """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head.
 
     Frames are deformed and drawn in chunks of ``chunk`` by ``workers`` processes
     (:mod:`mimika.render.parallel`; None: one per core for long tracks). The images do not
     depend on ``workers``. ``hair=False`` leaves the hair out. ``light``: a ``--light``
-    spec or :class:`~mimika.render.lighting.Lighting` (default: the ``news`` set).
+    spec or :class:`~mimika.render.lighting.Lighting` (default: the ``news`` set); ``shot``:
+    one of :data:`SHOTS`.
     """
     from mimika.face.heads.roles import objects_of_role
     from mimika.render.lighting import parse_light
@@ -227,7 +256,7 @@ def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str 
     w, h = size
     if workers is None:
         workers = default_workers(track.n_frames, chunk)
-    cam = news_camera(rig.head, view, w / h)
+    cam = news_camera(rig.head, view, w / h, shot)
     # video: the blurred skin irradiance is refreshed every third frame (see SkinParams)
     skin = SkinParams(refresh=3) if skin_shader else False
     frames = render_track(rig, track.values, track.channels, camera=cam, size=size,
@@ -273,14 +302,14 @@ def _in_background(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Callabl
 def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en",
                 head: str | None = None, layers: Iterable[str] | None = None,
                 progress: Progress | None = None, fps: float = 25.0,
-                size: tuple[int, int] = (640, 480), view: str = "front",
+                size: tuple[int, int] = DEFAULT_SIZE, view: str = "front",
                 voice: str | None = None, rate: int = 165, samples: int = 0,
                 seed: int | None = None, subtitles: bool = True,
                 aus: str | os.PathLike | None = None, crf: int = 23,
                 preset: str = "veryfast", rig: Any = None, news: NewsTrack | None = None,
                 workers: int | None = None, audio: str | os.PathLike | None = None,
-                mood: str | None = None, light: Any = None, engine: str | None = None
-                ) -> NewsResult:
+                mood: str | None = None, light: Any = None, engine: str | None = None,
+                shot: str = DEFAULT_SHOT, title: str | None = None) -> NewsResult:
     """Read ``text`` (plain article or ``<speak>`` script) as a newsreader into an MP4.
 
     Writes ``out`` (H.264 yuv420p + AAC, ``fps`` frames/s, frame i showing time i / fps, video
@@ -293,7 +322,9 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
     ``audio``: a recording of the text (WAV, MP3 … any voice) — the text is aligned to it and
     the video carries it unchanged, so the video lasts exactly as long as the recording.
     ``mood``: see :func:`news_track`. ``light``: a ``--light`` spec (default ``news``).
-    ``engine``/``voice``: who speaks (:func:`mimika.speech.tts.synthesize`).
+    ``engine``/``voice``: who speaks (:func:`mimika.speech.tts.synthesize`). ``shot``: the
+    framing (:data:`SHOTS`); ``title``: a lower-third name strap ("Name — Programme") shown
+    over the first seconds (:class:`mimika.render.video.TitleStrap`).
     """
     from mimika.render.video import VideoWriter
 
@@ -304,6 +335,10 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         raise ParameterError(f"size={w}x{h}: width and height must be even for H.264 video")
     enabled = check_layers(layers)
     fps = valid_fps(fps)
+    check_shot(shot)
+    from mimika.render.video import TitleStrap
+
+    strap = TitleStrap(title, (w, h)) if title is not None else None
     from mimika.render.lighting import parse_light
 
     light = parse_light(light, "news")
@@ -357,10 +392,10 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         sound[: min(len(sound), len(utt.audio))] = utt.audio[: len(sound)]
     frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
                            skin_shader="skin" in enabled, hair="hair" in enabled,
-                           workers=workers, timings=tm, light=light)
+                           workers=workers, timings=tm, light=light, shot=shot)
     # closing: an interrupted render stops its worker processes at once
     with VideoWriter(out, fps=fps, size=(w, h), audio=sound, sr=utt.sr, crf=crf,
-                     preset=preset) as vw, contextlib.closing(frames):
+                     preset=preset, overlay=strap) as vw, contextlib.closing(frames):
         for i, img in enumerate(frames):
             vw.write(img)
             if progress is not None:

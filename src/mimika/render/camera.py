@@ -112,6 +112,14 @@ def face_frame(head: Head, positions: Mapping[str, np.ndarray] | None = None):
     return centre, top - bottom, hi[0] - lo[0]
 
 
+def head_points(head: Head, positions: Mapping[str, np.ndarray] | None = None) -> np.ndarray:
+    """The vertices of the head proper (M, 3): those of the landmark object (the skin) at or
+    above the chin (landmark 8) — the skull, face, ears, not the neck or a body below."""
+    v = np.asarray((positions or head.rest)[head.landmark_object], np.float64)
+    chin = float(head.landmark_points(positions)[8, 1])
+    return v[v[:, 1] >= chin]
+
+
 def frame_head(
     head: Head,
     view: str = "front",
@@ -119,17 +127,25 @@ def frame_head(
     fov_y: float = FOV_Y,
     fill: float = 0.75,
     eye_line: float | None = None,
+    head_share: float | None = None,
 ) -> Camera:
     """A camera on ``view`` whose image the face (hairline to chin) fills by ``fill`` in height.
 
-    ``eye_line`` puts the eyes that fraction of the image height from the top (a TV
-    head-and-shoulders shot: ``fill`` ≈ 0.3, ``eye_line`` ≈ 0.36); default: the face centred.
-    The framing comes from the rest-pose landmarks, so it stays put while a face animates.
+    ``head_share`` instead sizes the whole head (crown to chin, :func:`head_points`) to that
+    share of the image height. ``eye_line`` puts the eyes that fraction of the image height
+    from the top (a TV medium close-up: ``head_share`` ≈ 1/3, ``eye_line`` ≈ 1/3); default:
+    the face centred. The framing comes from the rest-pose landmarks, so it stays put while a
+    face animates.
     """
     angle = math.radians(VIEW_ANGLES[check_view(view)])
     if not 0.05 <= fill <= 1.0:
         raise ParameterError(f"fill={fill} must be in [0.05, 1]")
     centre, height, width = face_frame(head)
+    if head_share is not None:
+        if not 0.05 <= head_share <= 1.0:
+            raise ParameterError(f"head_share={head_share} must be in [0.05, 1]")
+        pts = head_points(head)
+        height, fill = float(np.ptp(pts[:, 1])), head_share
     visible_h = max(height / fill, width / (0.85 * aspect))
     if eye_line is not None:
         if not 0.05 <= eye_line <= 0.95:

@@ -10,11 +10,13 @@ overlap.
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 import os
 import queue
 import threading
 import time
+import unicodedata
 from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
@@ -51,6 +53,8 @@ class VideoWriter:
     sr : sample rate of ``audio`` in Hz (keyword-only, required with audio)
     crf, preset : libx264 quality (0–51, lower is better) and speed preset
     threaded : encode in a background thread
+    overlay : ``overlay(frame, t)`` → the frame to encode, given each frame and its time in
+        seconds (e.g. a :class:`TitleStrap`); it runs in the encoding thread
 
     Use as a context manager: leaving the block normally finishes the file; an exception
     discards it.
@@ -58,7 +62,8 @@ class VideoWriter:
 
     def __init__(self, path: str | os.PathLike, *, fps: float, size: tuple[int, int],
                  audio: np.ndarray | None = None, sr: int | None = None, crf: int = 23,
-                 preset: str = "veryfast", threaded: bool = True) -> None:
+                 preset: str = "veryfast", threaded: bool = True,
+                 overlay: Callable[[np.ndarray, float], np.ndarray] | None = None) -> None:
         av = _import_av()
         w, h = (int(s) for s in size)
         if w % 2 or h % 2 or w < 2 or h < 2:
@@ -71,6 +76,7 @@ class VideoWriter:
             raise ParameterError("audio needs its sample rate sr")
         self.path = Path(path)
         self.size = (w, h)
+        self.overlay = overlay
         self.fps = Fraction(fps).limit_denominator(1001)
         self.n_frames = 0
         #: seconds spent encoding (in the worker thread when threaded)
@@ -131,6 +137,8 @@ class VideoWriter:
     def _encode(self, rgb: np.ndarray, index: int) -> None:
         av = _import_av()
         t0 = time.perf_counter()
+        if self.overlay is not None:
+            rgb = self.overlay(rgb, index / float(self.fps))
         fr = av.VideoFrame.from_ndarray(rgb, format="rgb24")
         fr.pts = index
         fr.time_base = Fraction(1, 1) / self.fps
@@ -280,3 +288,141 @@ def probe(path: str | os.PathLike) -> dict[str, Any]:
             "video_duration": last_v + 1.0 / fps if n else 0.0,
             "audio_duration": a_end if ast is not None else None,
         }
+
+
+@functools.cache
+def _strap_style() -> dict[str, Any]:
+    """``data/strap.json`` without its ``_doc``."""
+    import json
+    from importlib import resources
+
+    text = resources.files("mimika.render").joinpath("data/strap.json").read_text("utf-8")
+    return {k: v for k, v in json.loads(text).items() if not k.startswith("_")}
+
+
+def _strap_font(name: str, px: int) -> Any:
+    from importlib import resources
+
+    from PIL import ImageFont
+
+    with resources.as_file(resources.files("mimika.render").joinpath(f"data/fonts/{name}")) as f:
+        return ImageFont.truetype(str(f), max(int(px), 6))
+
+
+def _missing_glyphs(font: Any, text: str) -> list[str]:
+    """Characters of ``text`` that ``font`` draws as its 'missing glyph' box."""
+    def drawn(c: str) -> tuple:
+        m = font.getmask(c)
+        return m.size, bytes(m)
+
+    box = drawn("\uffff")
+    return sorted({c for c in text if not c.isspace() and drawn(c) == box})
+
+
+def split_title(title: str) -> tuple[str, str]:
+    """``"Amara Okafor — News at Nine"`` → (name, programme); no separator: (title, "")."""
+    for sep in (" — ", " – ", " | ", " - "):
+        if sep in title:
+            name, _, line = title.partition(sep)
+            return name.strip(), line.strip()
+    return title.strip(), ""
+
+
+def check_title(title: str) -> str:
+    """``title`` without surrounding spaces, or a ParameterError: empty, longer than the
+    strap takes, control characters, or characters its fonts cannot draw."""
+    st = _strap_style()
+    t = str(title).strip()
+    if not t:
+        raise ParameterError("the title is empty; give a name, e.g. --title "
+                             "'Amara Okafor — News at Nine'")
+    if len(t) > st["max_chars"]:
+        raise ParameterError(f"the title has {len(t)} characters; a name strap takes at most "
+                             f"{st['max_chars']}")
+    bad = sorted({f"U+{ord(c):04X}" for c in t if unicodedata.category(c)[0] == "C"})
+    if bad:
+        raise ParameterError(f"the title contains control characters ({', '.join(bad)}); "
+                             "give one line of text")
+    name, line = split_title(t)
+    for text, key in ((name, "name_font"), (line, "line_font")):
+        miss = _missing_glyphs(_strap_font(st[key], 32), text)
+        if miss:
+            raise ParameterError(f"the title's font ({st[key].removesuffix('.ttf')}) cannot "
+                                 f"draw {' '.join(repr(c) for c in miss[:5])}")
+    return t
+
+
+class TitleStrap:
+    """A lower-third name strap over video frames: a dark bar with the name and a light bar
+    with the programme below it, an accent stripe on the left (``data/strap.json``). Call it
+    with a frame (H, W, 3) uint8 and its time (s): the frame is returned with the strap at
+    that time's opacity (it fades in and out, see the style file)."""
+
+    def __init__(self, title: str, size: tuple[int, int]) -> None:
+        from PIL import Image, ImageDraw
+
+        st = _strap_style()
+        self.style = st
+        self.title = check_title(title)
+        name, line = split_title(self.title)
+        w, h = (int(x) for x in size)
+        px = lambda k: max(round(st[k] * h), 1)  # noqa: E731
+        x0, pad, accent = px("left"), px("pad"), px("accent_width")
+        room = w - 2 * x0 - accent - 2 * pad
+        rows = [(name, st["name_font"], st["name_size"], st["name_bar"], st["name_color"])]
+        if line:
+            rows.append((line, st["line_font"], st["line_size"], st["line_bar"],
+                         st["line_color"]))
+        fitted = []
+        for text, font_name, size_k, bar, ink in rows:
+            for scale in np.linspace(1.0, 0.7, 7):
+                font = _strap_font(font_name, size_k * h * scale)
+                if font.getlength(text) <= room:
+                    break
+            else:
+                raise ParameterError(f"the title {self.title!r} is too long for a {w}x{h} "
+                                     "video; shorten it or choose a larger --size")
+            fitted.append((text, font, bar, ink))
+        width = max(max(int(f.getlength(t)) for t, f, _, _ in fitted) + 2 * pad,
+                    px("min_width") - accent)
+        heights = [round(f.size * 1.15) + pad for _, f, _, _ in fitted]
+        total = sum(heights)
+        rgb = np.zeros((total, accent + width, 3), np.float32)
+        alpha = np.zeros((total, accent + width), np.float32)
+        y = 0
+        for (text, font, bar, ink), bh in zip(fitted, heights, strict=True):
+            rgb[y:y + bh, accent:] = bar[:3]
+            alpha[y:y + bh, accent:] = bar[3]
+            mask = Image.new("L", (width, bh))
+            ImageDraw.Draw(mask).text((pad, bh / 2), text, fill=255, font=font, anchor="lm")
+            m = np.asarray(mask, np.float32)[:, :, None] / 255.0
+            rgb[y:y + bh, accent:] = rgb[y:y + bh, accent:] * (1 - m) + np.asarray(ink) * m
+            alpha[y:y + bh, accent:] = np.maximum(alpha[y:y + bh, accent:], m[:, :, 0])
+            y += bh
+        rgb[:, :accent] = st["accent"][:3]
+        alpha[:, :accent] = st["accent"][3]
+        top = min(px("top"), h - total)
+        #: the strap's box in the frame: (x0, y0, x1, y1) pixels
+        self.box = (x0, top, min(x0 + accent + width, w), top + total)
+        cw, ch = self.box[2] - x0, total
+        # premultiplied sRGB in 0..255
+        self._alpha = alpha[:ch, :cw, None]
+        self._color = (rgb[:ch, :cw] * 255.0) * self._alpha
+
+    def opacity(self, t: float) -> float:
+        """How opaque the strap is at ``t`` seconds (0 before it comes in and after it goes)."""
+        st = self.style
+        ramp_in = (t - st["in"]) / st["fade"]
+        ramp_out = (st["out"] - t) / st["fade"]
+        return float(np.clip(min(ramp_in, ramp_out), 0.0, 1.0))
+
+    def __call__(self, frame: np.ndarray, t: float) -> np.ndarray:
+        a = self.opacity(t)
+        if a <= 0.0:
+            return frame
+        x0, y0, x1, y1 = self.box
+        out = np.array(frame, copy=True)
+        region = out[y0:y1, x0:x1].astype(np.float32)
+        out[y0:y1, x0:x1] = np.clip(region * (1.0 - a * self._alpha) + a * self._color + 0.5,
+                                    0, 255).astype(np.uint8)
+        return out
