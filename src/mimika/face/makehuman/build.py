@@ -162,13 +162,13 @@ def tuck_under(skin_piece: Piece, cloth: Piece, *, skin_w: sp.csr_matrix,
     cf = np.concatenate(list(cloth.parts.values()))
     tri = skin(cloth.vertices.astype(np.float64), cloth_w, pose)[cf]
     kd = cKDTree(tri.mean(1))
-    near = np.flatnonzero(kd.query(v, distance_upper_bound=reach * 2)[0] < np.inf)
+    near = np.flatnonzero(kd.query(v, distance_upper_bound=reach * 4)[0] < np.inf)
     rot = (skin_w[first] @ pose[:, :, :3].reshape(len(pose), 9)).reshape(-1, 3, 3)
     moved = 0
     for i in near:
         step = np.zeros(3)
         for _ in range(4):  # layered clothes (collar over shirt): tuck under each layer
-            cand = kd.query_ball_point(v[i] + step, reach * 3)
+            cand = kd.query_ball_point(v[i] + step, reach * 6)
             t = _first_hit(v[i:i + 1] + step, -n[i:i + 1], tri[cand], reach)[0]
             if not np.isfinite(t):
                 break
@@ -338,10 +338,11 @@ def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
     for p in pieces:
         if p.category == "body":
             settle_cloth(p, weights[p.name], rest, body, body_tris)
-    for p in pieces:
-        if p.category == "body":
-            tuck_under(pieces[0], p, skin_w=weights["skin"], cloth_w=weights[p.name],
-                       pose=rest)
+    for _ in range(2):  # a second pass catches skin the first one's moves turned outward
+        for p in pieces:
+            if p.category == "body":
+                tuck_under(pieces[0], p, skin_w=weights["skin"], cloth_w=weights[p.name],
+                           pose=rest)
     log.debug("character: %d pieces, %d vertices", len(pieces),
               sum(len(p.vertices) for p in pieces))
     return Built(pieces, skel, names, deltas, weights, verts)

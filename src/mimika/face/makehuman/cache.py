@@ -22,7 +22,7 @@ from mimika.face.makehuman.skeleton import Skeleton
 log = logging.getLogger(__name__)
 
 #: bump when build.py changes what it produces
-VERSION = 14
+VERSION = 16
 
 
 def cache_dir() -> Path:
