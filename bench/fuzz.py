@@ -1,5 +1,6 @@
-"""The release fuzz run (issue 20): ≥ 100 000 cases over script, project, batch spec,
-expression library, every CSV reader and character files; goal 0 crashes and 0 hangs.
+"""The release fuzz run (issues 20, 27): ≥ 100 000 cases over script, project, batch spec,
+expression library, every CSV reader, character files and recordings; goal 0 crashes and
+0 hangs. Prints the process's peak resident memory after each target.
 
 The cases are those of ``tests/fuzzing.py`` (which CI samples through hypothesis), made from
 seeds 0, 1, 2, … so that any failure is reproduced by its target and seed.
@@ -14,6 +15,7 @@ import argparse
 import logging
 import os
 import random
+import resource
 import sys
 import tempfile
 import time
@@ -21,6 +23,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent.parent / "tests"))
 from fuzzing import HANG_SECONDS, TARGETS, check
+
+
+def _peak_mb() -> float:
+    """Peak resident memory of this process so far (MB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def main() -> int:
@@ -61,9 +68,11 @@ def main() -> int:
         dt = time.perf_counter() - t0
         total += per
         print(f"{name:<12} {per:8d} cases in {dt:7.1f} s ({per / dt:6.0f}/s), "
-              f"{sum(seen.values())} failed ({len(seen)} distinct)", flush=True)
+              f"{sum(seen.values())} failed ({len(seen)} distinct), peak RSS so far "
+              f"{_peak_mb():.0f} MB", flush=True)
     dt = time.perf_counter() - t_all
-    print(f"total        {total:8d} cases in {dt:7.1f} s: {crashes} crashes, {hangs} hangs")
+    print(f"total        {total:8d} cases in {dt:7.1f} s: {crashes} crashes, {hangs} hangs, "
+          f"peak RSS {_peak_mb():.0f} MB")
     return 1 if crashes or hangs else 0
 
 

@@ -498,7 +498,6 @@ def time_limit(seconds: float = HANG_SECONDS):
         signal.signal(signal.SIGALRM, old)
 
 
-#: name → (generator of one case from a Random, run)
 # -- character files -----------------------------------------------------------------------------
 _CHAR_VALUES = ["0.5", "34", "-1", "1e999", ".nan", "!!int", "!!int 1.0", "!!float x", "true",
                 "null", "[]", "{}", "'#zzzzzz'", "\"#74492f\"", "{african: 0.9, asian: 0}",
@@ -542,6 +541,9 @@ def run_character(case: str) -> None:
     character_from_dict(_parse(case, "fuzz.yaml"), "fuzz.yaml", "fuzz")
 
 
+from fuzz_recordings import gen_recording, run_recording  # noqa: E402
+
+#: name → (generator of one case from a Random, run)
 TARGETS: dict[str, tuple[Callable[[R], Any], Callable[[Any], None]]] = {
     "script": (gen_script, run_script),
     "project": (gen_project, run_project),
@@ -549,6 +551,7 @@ TARGETS: dict[str, tuple[Callable[[R], Any], Callable[[Any], None]]] = {
     "library": (gen_library, run_library),
     "csv": (gen_csv, run_csv),
     "character": (gen_character, run_character),
+    "recording": (gen_recording, run_recording),
 }
 
 

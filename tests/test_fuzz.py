@@ -1,5 +1,5 @@
-"""Fuzzing the readers (issue 20): script, project, batch spec, expression library, every
-CSV reader and character files get random and hostile input; each returns or raises a
+"""Fuzzing the readers (issues 20, 27): script, project, batch spec, expression library, every
+CSV reader, character files and recordings get random and hostile input; each returns or raises a
 MimikaError, within ``fuzzing.HANG_SECONDS``. This is the CI share (``FUZZ_EXAMPLES`` cases
 per reader); the release run is ``make fuzz`` (bench/fuzz.py, ≥ 100 000 cases)."""
 

@@ -83,3 +83,86 @@ def test_a_killed_render_leaves_no_espeak_copy_in_the_temp_folder(tmp_path):
     assert list(cache.glob("espeak/*/libespeak*")) == copies
     assert subprocess.run(say, env=env, capture_output=True, timeout=120).returncode == 0
     assert not list(tmp.glob("mimika-espeak-*"))
+
+
+# -- the WAV reader (streamed, chunk by chunk) -----------------------------------------------------
+def _riff(*chunks: bytes) -> bytes:
+    body = b"WAVE" + b"".join(chunks)
+    return b"RIFF" + struct.pack("<I", len(body)) + body
+
+
+def _ck(cid: bytes, body: bytes, size: int | None = None) -> bytes:
+    return cid + struct.pack("<I", len(body) if size is None else size) + body + \
+        b"\0" * (len(body) % 2)
+
+
+def _fmt(tag=1, ch=1, sr=16000, bits=16) -> bytes:
+    return _ck(b"fmt ", struct.pack("<HHIIHH", tag, ch, sr, sr * ch * bits // 8, ch * bits // 8,
+                                    bits))
+
+
+def test_wav_chunks_nested_deep_padded_or_piped_read_like_plain_ones(tmp_path):
+    from mimika.speech.audio import read_wav
+
+    tone = (np.sin(np.arange(1600) * 0.3) * 0.5).astype(np.float32)
+    pcm = (tone * 32767).astype("<i2").tobytes()
+    deep = b"INFO"
+    for _ in range(5000):  # a LIST inside a LIST … 5 000 deep: one chunk to skip
+        deep = _ck(b"LIST", b"INFO" + deep)
+    stereo24 = np.repeat((tone * 8388607).astype("<i4")[:, None], 2, axis=1)
+    cases = {
+        "nested": _riff(deep, _fmt(), _ck(b"data", pcm)),
+        "data first": _riff(_ck(b"data", pcm), _ck(b"junk", b"x" * 3), _fmt()),
+        "piped": _riff(_fmt(), _ck(b"data", pcm, 0xFFFFFFFF)),
+        "float": _riff(_fmt(tag=3, bits=32), _ck(b"data", tone.astype("<f4").tobytes())),
+        "24-bit stereo": _riff(_fmt(ch=2, bits=24), _ck(b"data", stereo24.astype("<i4").view(
+            np.uint8).reshape(-1, 4)[:, :3].tobytes())),
+    }
+    for kind, data in cases.items():
+        f = tmp_path / "rec.wav"
+        f.write_bytes(data)
+        a, sr = read_wav(f)
+        assert sr == 16000 and len(a) == 1600, kind
+        assert np.max(np.abs(a - tone)) < 1e-3, kind
+
+
+@pytest.mark.parametrize("kind, data, message", [
+    ("no fmt", _riff(_ck(b"data", bytes(3200))), "no format ('fmt ') chunk"),
+    ("no data", _riff(_fmt()), "no 'data' chunk"),
+    ("12-bit", _riff(_fmt(bits=12), _ck(b"data", bytes(3200))), "12-bit samples"),
+    ("a-law", _riff(_fmt(tag=6, bits=8), _ck(b"data", bytes(3200))), "format 6"),
+    ("NaN", _riff(_fmt(tag=3, bits=32), _ck(b"data", np.full(1600, np.nan, "<f4").tobytes())),
+     "NaN"),
+    ("no channels", _riff(_fmt(ch=0), _ck(b"data", bytes(3200))), "no channels"),
+    ("short fmt", _riff(_ck(b"fmt ", bytes(6)), _ck(b"data", bytes(3200))), "not 16"),
+])
+def test_a_broken_wav_is_one_line(tmp_path, kind, data, message):
+    f = tmp_path / "rec.wav"
+    f.write_bytes(data)
+    r = _align(f)
+    assert r.returncode == 2, (kind, r.stderr[-500:])
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and "rec.wav" in lines[0], r.stderr
+
+
+def test_a_stream_whose_frames_change_layout_midway_decodes(tmp_path):
+    av = pytest.importorskip("av")
+    from mimika.speech.audio import read_media
+
+    parts = []
+    for layout in ("mono", "stereo"):  # two MP3 streams end to end: frames of two layouts
+        f = tmp_path / f"{layout}.mp3"
+        ch = 1 if layout == "mono" else 2
+        with av.open(str(f), "w", options={"write_xing": "0", "id3v2_version": "0"}) as c:
+            st = c.add_stream("libmp3lame", rate=16000, layout=layout)
+            x = (np.sin(np.arange(16000) * 0.1) * 9000).astype(np.int16)
+            fr = av.AudioFrame.from_ndarray(np.repeat(x[None, :], ch, axis=0).reshape(1, -1),
+                                            format="s16", layout=layout)
+            fr.sample_rate = 16000
+            for p in [*st.encode(fr), *st.encode(None)]:
+                c.mux(p)
+        parts.append(f.read_bytes())
+    both = tmp_path / "both.mp3"
+    both.write_bytes(b"".join(parts))
+    a, sr = read_media(both)
+    assert sr == 16000 and 1.5 < len(a) / sr < 2.5

@@ -58,40 +58,12 @@ def write_wav(path: str | os.PathLike, audio: np.ndarray, *, sr: int) -> None:
 
 
 def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
-    """Read a PCM WAV (8/16/24/32-bit, any channels, mixed to mono).
+    """Read a PCM (8/16/24/32-bit) or float WAV, any channels mixed to mono, streamed
+    (:mod:`mimika.speech.wavread`). Returns ``(audio, sr)``: float32 shape (n_samples,) in
+    [-1, 1] and the rate in Hz."""
+    from mimika.speech.wavread import read_wav as read
 
-    Returns ``(audio, sr)``: float32 shape (n_samples,) in [-1, 1] and the rate in Hz.
-    """
-    p = Path(path)
-    if not p.is_file():
-        raise DataError(f"audio file {str(p)!r} does not exist")
-    try:
-        with wave.open(str(p), "rb") as w:
-            n_ch, width, sr = w.getnchannels(), w.getsampwidth(), w.getframerate()
-            limits.check_recording(w.getnframes() / max(sr, 1), sr, n_ch, repr(str(p)))
-            raw = w.readframes(w.getnframes())
-    except (wave.Error, EOFError) as e:
-        raise DataError(
-            f"cannot read {str(p)!r} as PCM WAV ({e}); convert it, e.g. "
-            f"'ffmpeg -i IN -ac 1 -c:a pcm_s16le OUT.wav'"
-        ) from None
-    if width == 1:
-        a = (np.frombuffer(raw, np.uint8).astype(np.float32) - 128.0) / 128.0
-    elif width == 2:
-        a = np.frombuffer(raw, "<i2").astype(np.float32) / 32768.0
-    elif width == 3:
-        b = np.frombuffer(raw, np.uint8).reshape(-1, 3).astype(np.int32)
-        v = b[:, 0] | (b[:, 1] << 8) | (b[:, 2] << 16)
-        v = np.where(v >= 1 << 23, v - (1 << 24), v)
-        a = v.astype(np.float32) / float(1 << 23)
-    elif width == 4:
-        a = np.frombuffer(raw, "<i4").astype(np.float32) / float(1 << 31)
-    else:
-        raise DataError(f"{str(p)!r}: unsupported sample width {width} bytes")
-    a = a.reshape(-1, n_ch).mean(axis=1).astype(np.float32)
-    if a.size == 0:
-        raise DataError(f"audio file {str(p)!r} holds no samples")
-    return a, int(sr)
+    return read(path)
 
 
 def read_media(path: str | os.PathLike) -> tuple[np.ndarray, int]:
@@ -113,6 +85,9 @@ def read_media(path: str | os.PathLike) -> tuple[np.ndarray, int]:
                 raise DataError(f"{str(p)!r} has no audio stream")
             st = c.streams.audio[0]
             what = repr(str(p))
+            if getattr(st, "codec_context", None) is None:
+                raise DataError(f"{what}: its audio is in a format FFmpeg cannot decode; "
+                                "convert it to WAV")
             rate = int(st.rate or 0)
             secs = (float(st.duration * st.time_base) if st.duration and st.time_base
                     else (c.duration or 0) / 1e6)
@@ -120,21 +95,32 @@ def read_media(path: str | os.PathLike) -> tuple[np.ndarray, int]:
             # streamed: mono, at most 48 kHz, and stopped at the limit whatever the header said
             sr = min(rate, 48_000)
             most = int(limits.current().max_recording * sr) + sr
-            rs = av.AudioResampler(format="flt", layout="mono", rate=sr)
             parts, n = [], 0
+            rs, setup = None, None
             for fr in c.decode(st):
+                if (fr.format.name, fr.layout.name, fr.sample_rate) != setup:
+                    # a stream whose frames change rate or layout: a resampler for each run
+                    parts += _flush(rs)
+                    rs = av.AudioResampler(format="flt", layout="mono", rate=sr)
+                    setup = (fr.format.name, fr.layout.name, fr.sample_rate)
                 for f in rs.resample(fr):
                     parts.append(f.to_ndarray().reshape(-1))
                     n += parts[-1].size
                 if n > most:
                     limits.check_recording(n / sr, sr, 1, what)
-            parts += [f.to_ndarray().reshape(-1) for f in rs.resample(None)]
-    except av.error.FFmpegError as e:
-        raise DataError(f"cannot decode {str(p)!r}: {e}") from None
+            parts += _flush(rs)
+    except (av.error.FFmpegError, ValueError) as e:  # ValueError: frames PyAV cannot convert
+        raise DataError(f"cannot decode {str(p)!r}: {e}; convert it, e.g. "
+                        f"'ffmpeg -i {p.name} -ac 1 out.wav'") from None
     a = np.concatenate(parts).astype(np.float32) if parts else np.zeros(0, np.float32)
     if a.size == 0:
         raise DataError(f"audio file {str(p)!r} holds no samples")
     return a, sr
+
+
+def _flush(rs) -> list[np.ndarray]:
+    """What a PyAV resampler still holds (nothing without one)."""
+    return [] if rs is None else [f.to_ndarray().reshape(-1) for f in rs.resample(None)]
 
 
 def rms_envelope(audio: np.ndarray, *, sr: int, fps: float, n_frames: int | None = None
