@@ -73,18 +73,32 @@ def mel_power(audio: np.ndarray, *, sr: int, hop: float = HOP, win: float = WIN,
     """Mel power spectrogram, shape (n_frames, n_mels); frame *i* is centred at ``i·hop`` s."""
     a = valid_audio(audio, sr=sr)
     a = resample(a, orig_sr=int(sr), target_sr=FEAT_SR)
-    a = np.append(a[0] if len(a) else 0.0, a[1:] - 0.97 * a[:-1])
+    if not len(a):
+        a = np.zeros(1, np.float32)
     h, w = round(hop * FEAT_SR), round(win * FEAT_SR)
     n = max(1, math.ceil(len(a) / h))
-    a = np.pad(a, (w // 2, max(0, (n - 1) * h + w - len(a) - w // 2)))
     n_fft = 512
     fb = _mel_filterbank(n_fft, FEAT_SR, n_mels, 60.0, 7600.0).T
     window = np.hamming(w)[None, :]
     out = np.empty((n, n_mels))
     for s in range(0, n, BLOCK):  # block by block: the spectra of a long recording are GBs
-        idx = np.arange(w)[None, :] + h * np.arange(s, min(n, s + BLOCK))[:, None]
-        spec = np.abs(np.fft.rfft(a[idx] * window, n=n_fft, axis=1)) ** 2
-        out[s:s + len(idx)] = spec @ fb
+        k = min(n, s + BLOCK) - s
+        seg = _emphasised(a, s * h - w // 2, s * h - w // 2 + (k - 1) * h + w)
+        idx = np.arange(w)[None, :] + h * np.arange(k)[:, None]
+        spec = np.abs(np.fft.rfft(seg[idx] * window, n=n_fft, axis=1)) ** 2
+        out[s:s + k] = spec @ fb
+    return out
+
+
+def _emphasised(a: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """Samples ``lo … hi − 1`` of ``a`` after pre-emphasis (``a[t] − 0.97·a[t−1]``; the first
+    as it is), zero outside ``a``."""
+    out = np.zeros(hi - lo, np.float32)
+    s, e = max(lo, 0), min(hi, len(a))
+    if e > s:
+        seg = a[max(s - 1, 0):e]
+        y = seg[1:] - 0.97 * seg[:-1] if s > 0 else np.append(seg[0], seg[1:] - 0.97 * seg[:-1])
+        out[s - lo:e - lo] = y
     return out
 
 
@@ -93,14 +107,20 @@ def mfcc_features(mel: np.ndarray, *, n_mfcc: int = 13) -> np.ndarray:
     c1…c12 and the deltas of c0…c12, each column mean 0 / variance 1."""
     from scipy.fft import dct
 
-    logmel = np.log(mel + 1e-10)
-    c = dct(logmel, type=2, norm="ortho", axis=1)[:, :n_mfcc]
+    logmel = mel + 1e-10  # in place from here on: a long recording's arrays are 100s of MB
+    np.log(logmel, out=logmel)
+    c = dct(logmel, type=2, norm="ortho", axis=1, overwrite_x=True)[:, :n_mfcc].copy()
+    del logmel
     k = 2
     pad = np.pad(c, ((k, k), (0, 0)), mode="edge")
     delta = sum(i * (pad[k + i:len(c) + k + i] - pad[k - i:len(c) + k - i])
                 for i in range(1, k + 1)) / (2 * sum(i * i for i in range(1, k + 1)))
+    del pad
     f = np.hstack([c[:, 1:], delta])
-    f = (f - f.mean(axis=0)) / (f.std(axis=0) + 1e-8)
+    del c, delta
+    mu, sd = f.mean(axis=0), f.std(axis=0)
+    f -= mu
+    f /= sd + 1e-8
     return f.astype(np.float32)
 
 
@@ -112,7 +132,9 @@ def _match_noise(ref: np.ndarray, rec: np.ndarray) -> np.ndarray:
     top_ref = e_ref >= np.percentile(e_ref, 50)
     gain = max(float(e_rec[top_rec].mean() - noise.sum()), 1e-12) / max(
         float(e_ref[top_ref].mean()), 1e-12)
-    return gain * ref + noise[None, :]
+    out = gain * ref
+    out += noise[None, :]
+    return out
 
 
 ENGINES = ("auto", "sphinx", "dtw")
@@ -136,7 +158,9 @@ def _dtw_phones(a: np.ndarray, sr: int, transcript: str, lang: str, voice: str |
     ref_mel = mel_power(ref.audio[int(r0 * ref.sr):round(r1 * ref.sr)], sr=ref.sr)
     rec_mel = mel_power(rec, sr=sr)
     x = mfcc_features(_match_noise(ref_mel, rec_mel))
+    del ref_mel
     y = mfcc_features(rec_mel)
+    del rec_mel
     path = warp(x, y, hop=HOP)
     cost = float(np.sqrt(((x[path[:, 0]] - y[path[:, 1]]) ** 2).sum(axis=1)).mean())
     knots_ref, knots_rec = time_map(path, hop=HOP)
