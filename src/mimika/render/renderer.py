@@ -29,7 +29,7 @@ from mimika.render.context import get_context, render_lock
 from mimika.render.lighting import Lighting, parse_light, set_lights, unit
 from mimika.render.mouth import MouthCavity
 from mimika.render.occlusion import light_view, ortho
-from mimika.render.skin import VERTEX_ATTRIBUTES, VERTEX_LAYOUT
+from mimika.render.skin import VERTEX_ATTRIBUTES, VERTEX_LAYOUT, write_wrinkles
 from mimika.render.wrinkles import Wrinkles
 
 log = logging.getLogger(__name__)
@@ -166,7 +166,7 @@ class _GpuObject:
     """GPU state of one drawable object: dynamic VBO, index buffer, VAO and part ranges."""
 
     def __init__(self, ctx: Any, prog: Any, obj: MeshObject,
-                 face: np.ndarray | None = None) -> None:
+                 face: np.ndarray | None = None, reach: np.ndarray | None = None) -> None:
         self.name = obj.name
         self.category = obj.category
         self.n_vertices = obj.n_vertices
@@ -179,7 +179,7 @@ class _GpuObject:
         if not obj.oriented and _winding_inward(obj.vertices, faces):
             log.info("object %r: faces wind clockwise seen from outside; flipping", obj.name)
             faces = faces[:, [0, 2, 1]].copy()
-        ranges = _split_off_face(obj, faces, face)
+        ranges = _split_by_wrinkles(obj, faces, face, reach)
         if len(faces):
             faces = np.concatenate([f for _, f, _ in ranges])
         self.faces = faces
@@ -197,8 +197,9 @@ class _GpuObject:
             self.incidence = incidence_matrix(faces, obj.n_vertices)
         #: material, first index, index count, texture (or None), alpha mode
         self.parts: list[tuple[Material, int, int, Any, str]] = []
-        #: first indices of the parts off the face, drawn without the wrinkles
-        self.smooth: set[int] = set()
+        #: the wrinkle groups (``WR_GROUPS``) of skin-like parts by first index: only those
+        #: that reach the part are compiled into its program; 0 off the face (no wrinkles)
+        self.groups: dict[int, int] = {}
         textured = obj.uvs is not None and any(p.texture is not None for p in obj.parts)
         self.textures: list[Any] = []
         texs = []
@@ -208,10 +209,10 @@ class _GpuObject:
             if texs[-1] is not None:
                 self.textures.append(texs[-1])
         first = 0
-        for i, f, smooth in ranges:
+        for i, f, groups in ranges:
             p, tex = obj.parts[i], texs[i]
-            if smooth:
-                self.smooth.add(first)
+            if groups is not None:
+                self.groups[first] = groups
             self.parts.append((material(p.material), first, 3 * len(f), tex,
                                p.alpha_mode if tex is not None else "opaque"))
             first += 3 * len(f)
@@ -275,24 +276,105 @@ class _GpuObject:
                 o.release()
 
 
-def _split_off_face(obj: MeshObject, faces: np.ndarray, face: np.ndarray | None
-                    ) -> list[tuple[int, np.ndarray, bool]]:
+#: every wrinkle group (``WR_GROUPS`` of shaders/wrinkles.glsl: bit k for group k)
+ALL_GROUPS = (1 << 14) - 1
+#: face units per texel of the pass that finds which wrinkle groups reach which triangles
+REACH_TEXEL = 0.008
+#: wrinkle variants of the skin's programs at most (every rendering process compiles them)
+MAX_VARIANTS = 6
+
+
+def _split_by_wrinkles(obj: MeshObject, faces: np.ndarray, face: np.ndarray | None,
+                       reach: np.ndarray | None) -> list[tuple[int, np.ndarray, int | None]]:
     """The triangles of each part of ``obj`` (``faces``: all parts' in order) as (part index,
-    triangles, smooth); a skin-like part of the object with the face units ``face`` comes in
-    two: its triangles on the face, then those with no corner on it (smooth: drawn without
-    the wrinkles — llvmpipe runs every branch of a shader, taken or not). Empty ranges are
-    left out."""
+    triangles, wrinkle groups). A skin-like part of the object with the face units ``face``
+    comes in pieces by the groups that reach its triangles (``reach``, per triangle of
+    ``faces``; 0 for those with no corner on the face: drawn without the wrinkles — llvmpipe
+    runs every branch of a shader, taken or not); other parts come whole, groups None.
+    Empty pieces are left out."""
+    if face is not None:
+        groups = np.where((face[:, 2] > 0.0)[faces].any(axis=1),
+                          ALL_GROUPS if reach is None else reach, 0)
+        groups = _merge_variants(groups, MAX_VARIANTS)
     out = []
     first = 0
     for i, p in enumerate(obj.parts):
         f = faces[first: first + len(p.faces)]
-        first += len(p.faces)
         if face is None or p.material not in SKIN_LIKE:
-            out.append((i, f, False))
-            continue
-        on = (face[:, 2] > 0.0)[f].any(axis=1)
-        out += [(i, f[on], False), (i, f[~on], True)]
+            out.append((i, f, None))
+        else:
+            g = groups[first: first + len(p.faces)]
+            out += [(i, f[g == k], int(k)) for k in np.unique(g)]
+        first += len(p.faces)
     return [r for r in out if len(r[1])]
+
+
+def _merge_variants(groups: np.ndarray, k: int) -> np.ndarray:
+    """``groups`` (wrinkle group bits per triangle) with at most ``k`` distinct non-zero values,
+    each a superset of the bits it replaces: pairs are merged while there are more, the pair
+    that adds the least work (groups × triangles) first."""
+    vals, counts = np.unique(groups[groups != 0], return_counts=True)
+    n = dict(zip(vals.tolist(), counts.tolist(), strict=True))
+    into = {v: v for v in n}
+    bits = lambda m: bin(m).count("1")  # noqa: E731
+    while len(n) > k:
+        items = sorted(n.items())
+        _, a, b = min((bits(a | b) * (na + nb) - bits(a) * na - bits(b) * nb, a, b)
+                      for i, (a, na) in enumerate(items) for b, nb in items[i + 1:])
+        u = a | b
+        n[u] = n.pop(a) + n.pop(b) + n.get(u, 0) * (u not in (a, b))
+        into = {v: u if w in (a, b) else w for v, w in into.items()}
+    out = groups.copy()
+    for v, w in into.items():
+        out[groups == v] = w
+    return out
+
+
+def wrinkle_reach(ctx: Any, face: np.ndarray, faces: np.ndarray,
+                  landmarks: Mapping[str, Any]) -> np.ndarray:
+    """The wrinkle groups (``WR_GROUPS`` bits) that reach each triangle of ``faces`` (F, 3), or
+    its neighbours (a margin), on a mesh with face units ``face`` (N, 3) and the wrinkles'
+    ``landmarks`` uniforms. Found with the wrinkles' own code: the mesh drawn in face units,
+    and its vertices as points, every group whose branch a fragment enters or-ed into its
+    triangle (or vertex). All groups everywhere without GL 4.3 (storage buffers)."""
+    if ctx.version_code < 430 or not len(faces):
+        return np.full(len(faces), ALL_GROUPS, np.uint32)
+    used = face[np.unique(faces), :2]
+    lo, hi = used.min(0) - 0.05, used.max(0) + 0.05
+    size = tuple(int(x) for x in np.clip(np.ceil((hi - lo) / REACH_TEXEL), 1, 2048))
+    prog = ctx.program(vertex_shader=_shader("wrinkle_reach.vert.glsl"),
+                       fragment_shader=_shader("wrinkle_reach.frag.glsl"))
+    vbo = ctx.buffer(np.ascontiguousarray(face, np.float32).tobytes())
+    ibo = ctx.buffer(np.ascontiguousarray(faces, np.int32).tobytes())
+    tris = ctx.vertex_array(prog, [(vbo, "3f", "in_face")], ibo, 4)
+    points = ctx.vertex_array(prog, [(vbo, "3f", "in_face")])
+    slots = ctx.buffer(np.zeros(len(faces) + len(face), np.uint32).tobytes())
+    target = ctx.renderbuffer(size, components=1)
+    fbo = ctx.framebuffer(target)
+    try:
+        fbo.use()
+        ctx.viewport = (0, 0, *size)
+        ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE | ctx.BLEND)
+        slots.bind_to_storage_buffer(0)
+        prog["u_box"].value = (*lo, *(1.0 / (hi - lo)))
+        write_wrinkles(prog, np.ones(28, np.float32).tobytes())  # every group has depth
+        for name, value in landmarks.items():
+            if name in prog:
+                prog[name].value = value
+        prog["u_first"].value = 0
+        tris.render(ctx.TRIANGLES)
+        prog["u_first"].value = len(faces)
+        points.render(ctx.POINTS)
+        ctx.memory_barrier()
+        hit = np.frombuffer(slots.read(), np.uint32)
+    finally:
+        for o in (tris, points, fbo, target, slots, ibo, vbo, prog):
+            o.release()
+    tri = hit[: len(faces)] | np.bitwise_or.reduce(hit[len(faces) + faces], axis=1)
+    # a margin: or-ed over the triangles around each vertex, then over each one's corners
+    vert = np.zeros(len(face), np.uint32)
+    np.bitwise_or.at(vert, faces.ravel(), np.repeat(tri, 3))
+    return np.bitwise_or.reduce(vert[faces], axis=1)
 
 
 def _upload_texture(ctx: Any, image: np.ndarray) -> Any:
@@ -619,13 +701,14 @@ class Renderer:
         return self.lighting.shadows != "off"
 
     def _program(self, gl: dict, textured: bool, hair: bool, depth_only: bool = False,
-                 wrinkled: bool = False) -> Any:
+                 groups: int = 0) -> Any:
         """The mesh program variant: ``textured``, ``hair`` (strand shading), ``depth_only``
-        (texture coverage only, for a depth pre-pass), ``wrinkled`` (the skin's appearance
-        changes); compiled on first use with the lights set."""
+        (texture coverage only, for a depth pre-pass), ``groups`` (the skin's appearance
+        changes: the wrinkle groups compiled in, 0 for none); compiled on first use with the
+        lights set."""
         key = (("TEXTURED",) * textured + ("HAIR",) * hair + ("DEPTH_ONLY",) * depth_only
                + ("SHADOWS",) * (self._shadows and not depth_only)
-               + ("WRINKLES",) * (wrinkled and not depth_only))
+               + ("WRINKLES", f"WR_GROUPS {groups}") * bool(groups and not depth_only))
         progs = gl["progs"]
         if key not in progs:
             ctx = gl["ctx"]
@@ -736,14 +819,27 @@ class Renderer:
         """Set up the program for the part of ``o`` at index ``first`` and return the
         object's vertex array for it."""
         textured = tex is not None
-        wrinkled = (self._wr is not None and o.face_vbo is not None
-                    and mat.name in SKIN_LIKE and first not in o.smooth)
+        groups = o.groups.get(first, 0) if self._wr is not None else 0
         prog = self._program(gl, textured, textured and mat.model == "hair",
-                             textured and depth_only, wrinkled)
+                             textured and depth_only, groups)
         self._set_material(prog, mat, tex, mode)
-        if wrinkled:
-            prog["u_wr"].write(self._wr)
+        if groups and not depth_only:
+            write_wrinkles(prog, self._wr)
         return o.vao_for(prog)
+
+    def _gpu_object(self, ctx: Any, prog: Any, obj: MeshObject, landmarks: bool
+                    ) -> _GpuObject:
+        """The GPU object of ``obj``; the landmark object (``landmarks``) carries the face
+        units, and its skin the wrinkle groups that reach each triangle (in videos, whose
+        many frames repay finding them)."""
+        if not landmarks:
+            return _GpuObject(ctx, prog, obj)
+        face = self._wrinkles.face
+        reach = None
+        if self.crop:
+            faces = np.concatenate([p.faces for p in obj.parts]).astype(np.int32)
+            reach = wrinkle_reach(ctx, face, faces, self._wrinkles.uniforms)
+        return _GpuObject(ctx, prog, obj, face, reach)
 
     def _shadow_size(self, crop: Camera | None) -> tuple[int, int]:
         n = SHADOW_MAP[self.lighting.shadows]
@@ -834,7 +930,7 @@ class Renderer:
             shown = [_in_shot(o, crop, self.size) for o in shown]
         self._wrinkles = Wrinkles(self.head)
         lmo = self.head.landmark_object
-        self._objects = [_GpuObject(ctx, prog, o, self._wrinkles.face if o.name == lmo else None)
+        self._objects = [self._gpu_object(ctx, prog, o, o.name == lmo)
                          for o in shown if o.parts]
         for o in self._objects:
             o.update(None)
@@ -858,7 +954,7 @@ class Renderer:
                 for p in self._skin.programs:
                     if "u_mucosa" in p:
                         p["u_mucosa"].value = MUCOSA
-                self._set_landmarks(self._skin.final)
+                    self._set_landmarks(p)
             else:
                 log.warning("head %r has no UVs: skin shader off", self.head.name)
         log.debug(

@@ -19,6 +19,7 @@ pass (c) with the sharp irradiance only.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -57,6 +58,14 @@ class SkinParams:
     refresh: int = 1  #: recompute the blurred irradiance every ``refresh`` frames (video: 3)
 
 
+def write_wrinkles(prog: Any, depths: bytes | None) -> None:
+    """Set ``u_wr``, the wrinkle groups' depths (28 floats; None: all 0), where ``prog`` has it
+    (a program with only some groups compiled in keeps the array up to the last it uses)."""
+    if "u_wr" in prog:
+        u = prog["u_wr"]
+        u.write((depths or bytes(4 * 28))[: 4 * u.array_length])
+
+
 def seam_faces(uv: np.ndarray, faces: np.ndarray, *, limit: float = 0.25) -> np.ndarray:
     """Mask (F,) of triangles whose normalised UVs span more than ``limit`` (seam jumps)."""
     t = uv[faces]  # (F, 3, 2)
@@ -67,13 +76,14 @@ def seam_faces(uv: np.ndarray, faces: np.ndarray, *, limit: float = 0.25) -> np.
 class _SkinObject:
     """Skin parts of one GPU object: UV buffer, index buffers and VAOs for passes (a), (c)."""
 
-    def __init__(self, ctx: Any, gpu: Any, uv: np.ndarray, raw_uv: np.ndarray,
-                 progs: tuple[Any, Any, Any]) -> None:
+    def __init__(self, ctx: Any, gpu: Any, uv: np.ndarray, raw_uv: np.ndarray, irr: Any,
+                 final_for: Callable[[int], Any]) -> None:
         self.gpu = gpu
         self.uv = np.ascontiguousarray(uv, np.float32)  # normalised to the skin's UV frame
         self.uv_vbo = ctx.buffer(np.ascontiguousarray(raw_uv, np.float32).tobytes())
         self.mask: np.ndarray | None = None  # vertices of the skin-shaded parts
-        self.parts: dict[int, tuple[Any, Any, Any, int]] = {}  # first → (ibo, vao_a, vao_c, n)
+        #: first → (ibo, vao_a, vao_c, n, the program of pass (c))
+        self.parts: dict[int, tuple[Any, Any, Any, int, Any]] = {}
         self.rest_parts: dict[int, tuple[Any, int]] = {}  # seam triangles: (ibo_std, n)
         faces = gpu.faces
         for mat, first, count, *_ in gpu.parts:
@@ -86,12 +96,12 @@ class _SkinObject:
                 continue
             ibo = ctx.buffer(good.tobytes())
             face = [(gpu.face_vbo, "3f", "in_face")] if gpu.face_vbo is not None else []
-            # parts off the face are drawn by the program without the wrinkles
-            final = progs[2] if first in getattr(gpu, "smooth", ()) else progs[1]
+            # pass (c) with the wrinkle groups that reach the part (none off the face)
+            final = final_for(gpu.groups.get(first, 0))
             vaos = [ctx.vertex_array(p, [(gpu.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES),
                                          (self.uv_vbo, "2f", "in_uv"), *face], ibo, 4,
-                                     skip_errors=True) for p in (progs[0], final)]
-            self.parts[first] = (ibo, vaos[0], vaos[1], 3 * len(good))
+                                     skip_errors=True) for p in (irr, final)]
+            self.parts[first] = (ibo, vaos[0], vaos[1], 3 * len(good), final)
             if self.mask is None:
                 self.mask = np.zeros(len(uv), bool)
             self.mask[good.ravel()] = True
@@ -106,7 +116,7 @@ class _SkinObject:
                           int(seam.sum()), gpu.name)
 
     def release(self) -> None:
-        for ibo, va, vc, _ in self.parts.values():
+        for ibo, va, vc, *_ in self.parts.values():
             for o in (va, vc, ibo):
                 o.release()
         for ibo, vao, _ in self.rest_parts.values():
@@ -134,17 +144,18 @@ class SkinShader:
                                fragment_shader=_shader("skin_irradiance.frag.glsl", *defines))
         self.blur = ctx.program(vertex_shader=_shader("background.vert.glsl"),
                                 fragment_shader=_shader("skin_blur.frag.glsl"))
-        fd = (*defines, *final_defines)
-        self.final = ctx.program(vertex_shader=_shader("skin_final.vert.glsl", *fd),
-                                 fragment_shader=_shader("skin_final.frag.glsl", *fd))
-        #: pass (c) without ``final_defines``, for parts off the face (no wrinkles there)
-        self.final_smooth = self.final if not final_defines else ctx.program(
-            vertex_shader=_shader("skin_final.vert.glsl", *defines),
-            fragment_shader=_shader("skin_final.frag.glsl", *defines))
-        #: every program of the passes that light the skin
-        self.programs = list(dict.fromkeys((self.irr, self.final, self.final_smooth)))
-        for prog in self.programs:
-            set_lights(prog, lighting)
+        #: pass (c) by the wrinkle groups compiled in (``final_defines`` and WR_GROUPS; 0:
+        #: neither, for parts off the face)
+        self.finals: dict[int, Any] = {}
+
+        def final_for(groups: int) -> Any:
+            if groups not in self.finals:
+                fd = (*defines, *final_defines, f"WR_GROUPS {groups}") if groups else defines
+                self.finals[groups] = ctx.program(
+                    vertex_shader=_shader("skin_final.vert.glsl", *fd),
+                    fragment_shader=_shader("skin_final.frag.glsl", *fd))
+            return self.finals[groups]
+
         # one UV frame for all skin parts: their bounding box → [0, 1]²
         used = []
         for o in objects:
@@ -160,18 +171,18 @@ class SkinShader:
         pad = 0.01 * span
         lo, span = lo - pad, span + 2 * pad
         self.uv_xform = (float(lo[0]), float(lo[1]), float(1 / span[0]), float(1 / span[1]))
-        for prog in self.programs:
-            prog["u_uv_xform"].value = self.uv_xform
         self.objects: dict[str, _SkinObject] = {}
         for o in objects:
             if o.name in uvs:
                 raw = np.asarray(uvs[o.name], np.float64)
-                so = _SkinObject(ctx, o, (raw - lo) / span, raw,
-                                 (self.irr, self.final, self.final_smooth))
+                so = _SkinObject(ctx, o, (raw - lo) / span, raw, self.irr, final_for)
                 if so.parts:
                     self.objects[o.name] = so
                 else:
                     so.release()
+        for prog in self.programs:
+            set_lights(prog, lighting)
+            prog["u_uv_xform"].value = self.uv_xform
         w, h = p.size
         self.tex = [ctx.texture((w, h), 4, dtype=p.dtype) for _ in range(2)]
         self.stretch = ctx.texture((w, h), 4, dtype=p.dtype)
@@ -182,13 +193,18 @@ class SkinShader:
         self.fbos = [ctx.framebuffer(color_attachments=[t]) for t in self.tex]
         self.blur_vao = ctx.vertex_array(self.blur, [])
         self.blur["u_texel"].value = (1.0 / w, 1.0 / h)
-        for prog in self.programs[1:]:
+        for prog in self.finals.values():
             prog["u_mix"].value = p.mix
             prog["u_roughness"].value = p.roughness
         self.result = self.tex[0]
         self._frame = -1
         log.debug("skin shader: %d object(s), %dx%d texels, %d passes", len(self.objects), w, h,
                   p.passes)
+
+    @property
+    def programs(self) -> list[Any]:
+        """Every program of the passes that light the skin."""
+        return [self.irr, *self.finals.values()]
 
     def handles(self, gpu: Any, first: int) -> bool:
         """True if the part of ``gpu`` starting at index ``first`` is drawn by the skin shader."""
@@ -201,7 +217,7 @@ class SkinShader:
         p = self.params
         w, h = p.size
         vm = view_matrix.T.astype("f4").tobytes()
-        for prog in self.programs[1:]:
+        for prog in self.finals.values():
             prog["u_view"].write(vm)
         self._frame += 1
         if p.refresh > 1 and self._frame % p.refresh:
@@ -212,7 +228,7 @@ class SkinShader:
         ctx.viewport = (0, 0, w, h)
         self.fbo_irr.clear(0.0, 0.0, 0.0, 0.0)
         for so in self.objects.values():
-            for first, (_, vao_a, _, n) in so.parts.items():
+            for first, (_, vao_a, _, n, _) in so.parts.items():
                 mat = next(m for m, f, *_ in so.gpu.parts if f == first)
                 self.irr["u_wrap"].value = mat.wrap
                 self.irr["u_scatter"].value = mat.scatter
@@ -272,11 +288,9 @@ class SkinShader:
         ``albedo``: the part's texture (RGB colour, alpha a gloss map) or None; ``wrinkles``:
         this frame's wrinkle depths (``u_wr``), None for smooth skin."""
         so = self.objects[gpu.name]
-        _, _, vao_c, n = so.parts[first]
+        _, _, vao_c, n, f = so.parts[first]
         self.result.use(location=0)
-        f = self.final_smooth if first in getattr(gpu, "smooth", ()) else self.final
-        if "u_wr" in f:
-            f["u_wr"].write(wrinkles if wrinkles is not None else bytes(4 * 28))
+        write_wrinkles(f, wrinkles)
         f["u_irr"].value = 0
         f["u_textured"].value = albedo is not None
         if albedo is not None:
