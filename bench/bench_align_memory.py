@@ -76,24 +76,28 @@ def run(cmd: list[str], env: dict, cap_mb: float, timeout: float) -> tuple[float
     """(peak RSS in MB, wall seconds, status) of ``cmd``, killed over ``cap_mb`` or
     ``timeout``."""
     t0 = time.perf_counter()
-    p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     state = {"peak": 0.0, "why": ""}
+    done = threading.Event()
+    with tempfile.TemporaryFile() as errf:
+        p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=errf)
 
-    def watch() -> None:
-        while p.poll() is None:
-            rss = _rss_mb(p.pid)
-            state["peak"] = max(state["peak"], rss)
-            if rss > cap_mb or time.perf_counter() - t0 > timeout:
-                state["why"] = f"killed over {cap_mb:.0f} MB" if rss > cap_mb else "timeout"
-                p.kill()
-            time.sleep(0.05)
+        def watch() -> None:  # polls /proc only: the child is reaped by wait4 below
+            while not done.is_set():
+                rss = _rss_mb(p.pid)
+                state["peak"] = max(state["peak"], rss)
+                if rss > cap_mb or time.perf_counter() - t0 > timeout:
+                    state["why"] = f"killed over {cap_mb:.0f} MB" if rss > cap_mb else "timeout"
+                    p.kill()
+                time.sleep(0.05)
 
-    w = threading.Thread(target=watch, daemon=True)
-    w.start()
-    _, status, usage = os.wait4(p.pid, 0)
-    p.returncode = os.waitstatus_to_exitcode(status)
-    w.join()
-    err = p.stderr.read().decode(errors="replace").strip() if p.stderr else ""
+        w = threading.Thread(target=watch, daemon=True)
+        w.start()
+        _, status, usage = os.wait4(p.pid, 0)
+        done.set()
+        p.returncode = os.waitstatus_to_exitcode(status)
+        w.join()
+        errf.seek(0)
+        err = errf.read().decode(errors="replace").strip()
     peak = max(state["peak"], usage.ru_maxrss / 1024)
     why = state["why"] or ("ok" if p.returncode == 0 else f"exit {p.returncode}: {err[-200:]}")
     return peak, time.perf_counter() - t0, why

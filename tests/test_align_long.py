@@ -79,7 +79,7 @@ def test_cuts_fall_in_pauses_outside_words_and_bound_every_piece():
     spans_a = np.array(spans)
     cuts = pieces.cut_times(spans_a, _act(pauses, dur), dur)
     bounds = [0.0, *cuts, dur]
-    assert all(b - a <= pieces.PIECE + 1e-9 for a, b in pairwise(bounds))
+    assert all(pieces.MIN_PIECE - 1 <= b - a <= pieces.PIECE + 1e-9 for a, b in pairwise(bounds))
     for c in cuts:
         assert not any(s + pieces.SLACK < c < e - pieces.SLACK for s, e in spans)
         assert any(s <= c <= e for s, e in pauses)

@@ -20,7 +20,8 @@ from mimika.speech.vad import HOP
 
 #: recordings longer than this are aligned piece by piece; no piece is longer (s)
 PIECE = 60.0
-#: a piece is at least this long, where the recording allows (s)
+#: a piece is at least this long, the last one too, where the recording allows (s; at most
+#: half of :data:`PIECE`)
 MIN_PIECE = 20.0
 #: silence at least this long is a place to cut (s)
 MIN_PAUSE = 0.15
@@ -56,7 +57,7 @@ def cut_times(spans: np.ndarray, act: np.ndarray, dur: float, *, hop: float = HO
     out: list[float] = []
     t = 0.0
     while dur - t > PIECE:
-        lo, hi = t + MIN_PIECE, t + PIECE
+        lo, hi = t + MIN_PIECE, min(t + PIECE, dur - MIN_PIECE)  # no stub left at the end
         sel = (mids >= lo) & (mids <= hi)
         if sel.any():
             k = np.flatnonzero(sel)[::-1]  # the longest; of equals, the latest
