@@ -23,6 +23,7 @@ from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
 from mimika.face.makehuman.character_file import Character, load_character_spec
 from mimika.face.makehuman.paint import parts_of
 from mimika.face.makehuman.skeleton import rest_pose, skin
+from mimika.face.makehuman.teeth import seat_teeth
 from mimika.face.rigs.blendshape import ShapeSet, load_table
 from mimika.face.rigs.skinned import SkinnedRig, Skinning
 
@@ -174,7 +175,7 @@ def _with_ict_style(built: Built) -> Built:
 
 
 def _built(character: Character) -> Built:
-    """The character's geometry, from the cache or built (and cached)."""
+    """The character's geometry, from the cache or built (and cached), teeth seated."""
     path = cache.cache_path(character.geometry_key())
     built = cache.load(path)
     if built is None:
@@ -185,7 +186,7 @@ def _built(character: Character) -> Built:
             cache.save(path, built)
         except OSError as e:
             log.warning("cannot cache character %r in %s: %s", character.name, path, e)
-    return built
+    return seat_teeth(built)
 
 
 _LOADED: dict[str, tuple[Head, SkinnedRig]] = {}

@@ -126,31 +126,6 @@ def _rigid(v: np.ndarray, d: np.ndarray) -> np.ndarray:
     return (v - c) @ r.T + c + d.mean(0) - v
 
 
-def _by_neighbours(w: np.ndarray, s: np.ndarray, faces: np.ndarray, band: float = 0.08,
-                   rounds: int = 3) -> np.ndarray:
-    """Split weights ``w`` where vertices lie within ``band`` cm of the split surface (signed
-    distances ``s``) taken from their neighbours farther from it: closed lips touch along a
-    line, and a lip's contact vertices can lie a hair on the other lip's side of any smooth
-    surface — they belong to the lip their edges run to."""
-    amb = (np.abs(s) < band) & ((w == 0.0) | (w == 1.0))
-    if not amb.any() or len(faces) == 0:
-        return w
-    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    e = np.concatenate([e, e[:, ::-1]])
-    out = w.copy()
-    known = ~amb
-    for _ in range(rounds):
-        use = known[e[:, 1]] & amb[e[:, 0]]
-        tot = np.bincount(e[use, 0], minlength=len(w)).astype(float)
-        up = np.bincount(e[use, 0], weights=out[e[use, 1]], minlength=len(w))
-        vote = np.divide(up, tot, out=np.full(len(w), 0.5), where=tot > 0)
-        decided = amb & (np.abs(vote - 0.5) > 0.1)
-        out[decided] = (vote[decided] > 0.5).astype(float)
-        known = known | decided
-        amb = amb & ~decided
-    return out
-
-
 def generate_shapes(head: Head, names: Iterable[str] | None = None, style: str = "ict"
                     ) -> Shapes:
     """Deltas of shapes ``names`` (default: all available) of ``style`` on every object of
@@ -167,11 +142,10 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None, style: str =
     for sname, sp in fs.splits.items():
         for o in head.objects:
             v = o.vertices.astype(float)
-            w = sp.upper_weight(v)
             if o.category == "face":
-                upper[sname, o.name] = _by_neighbours(w, sp.signed(v), o.faces)
+                upper[sname, o.name] = sp.surface_weight(v, o.faces)
             else:  # rigid objects (teeth rows, tongue) go whole, by where most of them lies
-                upper[sname, o.name] = np.full(len(v), float(w.mean() > 0.5))
+                upper[sname, o.name] = np.full(len(v), float(sp.upper_weight(v).mean() > 0.5))
     want = list(available(style) if names is None else names)
     base = {n for w in want for n in (ARKIT_SUMS.get(w, (w,)) if w not in fs.linear else (w,))}
     out: Shapes = {}

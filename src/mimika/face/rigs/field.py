@@ -23,6 +23,8 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 
 from mimika.errors import DataError, ParameterError
 from mimika.face.head import Head
@@ -273,6 +275,29 @@ class Split:
         width = k * np.maximum(np.maximum(ax - x_out, x_in - ax), 0.0)
         t = np.clip(0.5 + 0.5 * s / np.maximum(width, 1e-9), 0.0, 1.0)
         return np.where(width > 1e-6, t * t * (3 - 2 * t), hard)
+
+    def surface_weight(self, v: np.ndarray, faces: np.ndarray, band: float = 0.6
+                       ) -> np.ndarray:
+        """:meth:`upper_weight` of a mesh's vertices, decided anew within ``band`` cm of the
+        split inside the opening: each vertex goes to the side it is nearer to along the
+        mesh. A lip's inner face curls behind the other lip and closed lips touch along a
+        line, so vertices a few millimetres past any smooth surface still belong to the lip
+        their surface runs to (else the upper lip's inner face hangs down with the lower).
+        Shapes generated on a mesh use it; the FieldRig keeps the seed's rule (a field over
+        space: the same point moves alike on any mesh)."""
+        w = self.upper_weight(v)
+        amb = (np.abs(self.signed(v)) < band) & ((w == 0.0) | (w == 1.0))
+        sides = [np.flatnonzero(~amb & (w > 0.5)), np.flatnonzero(~amb & (w <= 0.5))]
+        if not amb.any() or not all(len(x) for x in sides):
+            return w
+        e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+        g = coo_matrix((np.linalg.norm(v[e[:, 0]] - v[e[:, 1]], axis=1) + 1e-9,
+                        (e[:, 0], e[:, 1])), shape=(len(v), len(v))).tocsr()
+        d_up, d_lo = (dijkstra(g, directed=False, indices=x, min_only=True) for x in sides)
+        w = w.copy()
+        w[amb & (d_up < d_lo)] = 1.0
+        w[amb & (d_lo < d_up)] = 0.0
+        return w
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,72 @@
+"""The mouth as an observer sees it: teeth seated behind the lips as in a real mouth (an open
+smile shows the upper teeth, not both rows edge to edge) and lips that part cleanly."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+from tests.conftest import needs_makehuman
+
+pytestmark = needs_makehuman
+SMILE = {"AU06": 1.0, "AU12": 1.0, "AU25": 1.0}
+
+
+def _incisors(head, rig):
+    """Stacked teeth vertices' masks: upper and lower front incisors at the midline."""
+    teeth = head["teeth"].vertices
+    lower = np.linalg.norm(rig.deform({"AU27": 1.0})["teeth"] - teeth, axis=1) > 0.1
+    skin, lm = head["skin"].vertices, head.landmarks
+    mid = (np.abs(teeth[:, 0] - skin[lm[[48, 54]], 0].mean()) < 0.4) & (
+        np.abs(teeth[:, 1] - skin[lm[[62, 66]], 1].mean()) < 1.5)
+    return [row & (teeth[:, 2] > teeth[row, 2].max() - 0.3)
+            for row in (mid & ~lower, mid & lower)]
+
+
+@pytest.mark.parametrize("name", ["amara", "daniel", "mei", "tomas"])
+def test_an_open_smile_shows_the_upper_teeth_and_hides_the_lower(name):
+    """As on the ICT Face Model's scan of an actor (upper teeth fill 0.74 of the opening,
+    the lower edge 0.3 mm above the lip); MakeHuman's own dentition showed 0.29-0.35 and
+    2.6-4.1 mm of the lower teeth: a clenched grimace."""
+    from mimika.face.heads import load_head
+
+    head, rig = load_head(name)
+    up, lo = _incisors(head, rig)
+    lm = head.landmarks
+    rest = head["skin"].vertices
+    assert rest[lm[62], 1] - head["teeth"].vertices[up, 1].min() == pytest.approx(0.21, abs=0.02)
+    pos = rig.deform(SMILE)
+    ul, ll = pos["skin"][lm[62], 1], pos["skin"][lm[66], 1]
+    shown = (ul - pos["teeth"][up, 1].min()) / (ul - ll)
+    assert 0.6 < shown < 0.9
+    assert pos["teeth"][lo, 1].max() - ll < 0.1  # the lower incisors stay behind the lip
+
+
+def _upper_lip(head) -> np.ndarray:
+    """Skin vertices nearer (along the skin) to the upper lip's outer middle (landmark 51)
+    than to the lower's (57) and within 2 cm of the mouth."""
+    o = head["skin"]
+    v, f = o.vertices.astype(float), o.faces
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    g = coo_matrix((np.linalg.norm(v[e[:, 0]] - v[e[:, 1]], axis=1) + 1e-9, (e[:, 0], e[:, 1])),
+                   shape=(len(v), len(v))).tocsr()
+    d51, d57 = dijkstra(g, directed=False, indices=head.landmarks[[51, 57]])
+    return (d51 < d57) & (d51 < 2.0)
+
+
+@pytest.mark.parametrize("aus", [{"AU16": 0.8, "AU25": 0.8}, {"AU10": 1.0, "AU25": 1.0},
+                                 {"AU11": 1.0}])
+def test_parting_lips_leave_no_flap_over_the_front_teeth(character_rig, aus):
+    """No part of the upper lip's inner face is dragged along with the lower lip: it hung
+    6-9 mm into the opening in front of the incisors as a dark flap ('missing teeth')."""
+    rig = character_rig
+    head = rig.head
+    upper, lm = _upper_lip(head), head.landmarks
+    up, _ = _incisors(head, rig)
+    pos = rig.deform(aus)
+    skin = pos["skin"]
+    front = upper & (np.abs(skin[:, 0] - skin[lm[62], 0]) < 0.5) & (
+        skin[:, 2] > pos["teeth"][up, 2].max() - 0.05)
+    hang = skin[lm[62], 1] - skin[front, 1].min()
+    assert hang < 0.4, f"{aus}: the upper lip hangs {10 * hang:.1f} mm over the teeth"
