@@ -97,11 +97,19 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
     _, rig = load_head(args.head, resolution=getattr(args, "resolution", 1))
     track = _supported(track, rig)
     if ext in (".glb", ".gltf"):
-        from mimika.io.gltf import write_gltf
-        from mimika.render.appearance import export_appearance
+        from mimika.face.heads.gltf_export import avatar_export
 
-        attributes, extras = export_appearance(rig.head)
-        write_gltf(out, rig, track, attributes=attributes, extras=extras)
+        kept = avatar_export(rig, track)
+        if kept is not None:  # an avatar file: written again, with the animation added
+            from mimika.io.gltf_avatar import write_avatar_gltf
+
+            write_avatar_gltf(out, kept, track)
+        else:
+            from mimika.io.gltf import write_gltf
+            from mimika.render.appearance import export_appearance
+
+            attributes, extras = export_appearance(rig.head)
+            write_gltf(out, rig, track, attributes=attributes, extras=extras)
         last = max(track.n_frames - 1, 1)
         _say(args, f"wrote {out} ({track.n_frames} frames at {track.fps:g} fps, 0–"
                    f"{last / track.fps:.2f} s, {len(track.channels)} animated AUs; in Blender "

@@ -34,6 +34,7 @@ tests. ``.glb`` is binary; ``.gltf`` embeds its buffer as a base64 data URI.
 from __future__ import annotations
 
 import base64
+import hashlib
 import io
 import json
 import logging
@@ -184,6 +185,28 @@ class _Builder:
         self.bin += data
         return len(self.views) - 1
 
+    def add_sparse(self, d: np.ndarray) -> int:
+        """A sparse VEC3 float accessor of morph deltas ``d`` (N, 3): only the vertices that
+        move are stored (a face shape moves a few thousand of a body's vertices); one that
+        moves none is an accessor of zeros with no data."""
+        d = np.asarray(d, np.float32).reshape(-1, 3)
+        ids = np.flatnonzero(np.abs(d).max(1) > 0).astype(np.uint32) if len(d) else \
+            np.zeros(0, np.uint32)
+        vals = d[ids]
+        acc: dict[str, Any] = {"componentType": _FLOAT, "count": len(d), "type": "VEC3",
+                               "min": [0.0] * 3, "max": [0.0] * 3}
+        if len(ids):
+            lo, hi = vals.min(0), vals.max(0)
+            if len(ids) < len(d):  # the vertices left out are 0
+                lo, hi = np.minimum(lo, 0), np.maximum(hi, 0)
+            acc["min"], acc["max"] = lo.astype(float).tolist(), hi.astype(float).tolist()
+            acc["sparse"] = {"count": len(ids),
+                             "indices": {"bufferView": self.add_bytes(ids.tobytes()),
+                                         "componentType": _UINT},
+                             "values": {"bufferView": self.add_bytes(vals.tobytes())}}
+        self.accessors.append(acc)
+        return len(self.accessors) - 1
+
 
 _DELTAS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -246,6 +269,20 @@ class _Materials:
         self.images: list[dict] = []
         self.textures: list[dict] = []
         self._index: dict[tuple, int] = {}
+        self._textures: dict[bytes, int] = {}
+
+    def _texture(self, part: Part) -> int:
+        """The texture of ``part``'s image, one per image (materials sharing an image share
+        its texture: the image is stored once)."""
+        data = _png(part.texture.image, part.material in _SKIN_MATERIALS)
+        key = hashlib.sha1(data).digest()
+        if key not in self._textures:
+            view = self.b.add_bytes(data)
+            self.images.append({"bufferView": view, "mimeType": "image/png",
+                                "name": part.texture.name or part.material})
+            self.textures.append({"source": len(self.images) - 1, "sampler": 0})
+            self._textures[key] = len(self.textures) - 1
+        return self._textures[key]
 
     @staticmethod
     def textured(part: Part) -> bool:
@@ -269,12 +306,7 @@ class _Materials:
             pbr["baseColorFactor"] = [*_srgb_to_linear("#" + bytes(px[:3]).hex()),
                                       round(float(px[3]) / 255.0, 6) if len(px) > 3 else alpha]
         elif part.texture is not None:
-            data = _png(part.texture.image, part.material in _SKIN_MATERIALS)
-            view = self.b.add_bytes(data)
-            self.images.append({"bufferView": view, "mimeType": "image/png",
-                                "name": part.texture.name or part.material})
-            self.textures.append({"source": len(self.images) - 1, "sampler": 0})
-            pbr["baseColorTexture"] = {"index": len(self.textures) - 1}
+            pbr["baseColorTexture"] = {"index": self._texture(part)}
             pbr["baseColorFactor"] = [1.0, 1.0, 1.0, alpha]
         if part.alpha_mode == "blend" or alpha < 1.0:
             out["alphaMode"] = "BLEND"

@@ -29,6 +29,7 @@ from scipy.spatial import cKDTree
 
 from mimika.errors import DataError
 from mimika.face.head import Head, MeshObject, Part, Texture
+from mimika.face.heads.gltf_export import AvatarSource, Bind, Links
 from mimika.face.heads.gltf_parts import (
     Piece,
     eye_pivot,
@@ -123,10 +124,13 @@ def _bone(scene: GltfScene, kind: str) -> int | None:
     if vrm in scene.bones:
         return scene.bones[vrm]
     rx = bone_pattern(kind)
-    for i, n in enumerate(scene.node_names):
-        if rx.search(re.split(r"[.:|]", n)[-1]):
-            return i
-    return None
+    hits = [i for i, n in enumerate(scene.node_names) if rx.search(re.split(r"[.:|]", n)[-1])]
+    # a skin's joint first, then a node that holds no mesh (Ready Player Me's mesh node
+    # Wolf3D_Head is named like a head bone)
+    joints = {int(j) for m in scene.meshes if m.bind is not None for j in m.bind.joint_nodes}
+    meshes = {m.node for m in scene.meshes}
+    return next((i for i in hits if i in joints), next((i for i in hits if i not in meshes),
+                                                       hits[0] if hits else None))
 
 
 def mesh_category(m: SceneMesh, scene: GltfScene, eye_bones: set[int]) -> str:
@@ -194,15 +198,18 @@ def _side_checked(name: str, hv: np.ndarray, d: np.ndarray, row: dict) -> str:
 
 
 def _shapes(scene: GltfScene, parts: list[Piece], frame: Frame
-            ) -> tuple[Shapes, dict[str, str], list[dict]]:
-    """Canonical shapes (object → head-frame deltas), their origins and the morph table."""
+            ) -> tuple[Shapes, dict[str, str], list[dict], Links]:
+    """Canonical shapes (object → head-frame deltas), their origins, the morph table and
+    the file's morphs each shape is made of, per object."""
     shapes: Shapes = {}
     origin: dict[str, str] = {}
     rows: list[dict] = []
+    links: Links = {}
 
-    def add(name: str, obj: str, d: np.ndarray, raw: str) -> None:
+    def add(name: str, obj: str, d: np.ndarray, raw: str, binds: list[Bind]) -> None:
         shapes.setdefault(name, {})[obj] = d.astype(np.float32)
         origin.setdefault(name, raw)
+        links.setdefault(name, {})[obj] = binds
 
     moves = {i: np.any(np.abs(m.morph_deltas) > 0, axis=(1, 2)) for i, m in
              enumerate(scene.meshes) if m.morph_deltas is not None}
@@ -227,7 +234,7 @@ def _shapes(scene: GltfScene, parts: list[Piece], frame: Frame
             if name in shapes and pc.name in shapes[name]:
                 row["kind"], row["how"] = "duplicate", f"{name} already from another morph"
                 continue
-            add(name, pc.name, d, raw)
+            add(name, pc.name, d, raw, [(pc.src, k, 1.0)])
     for expr, binds in scene.expressions.items():
         got = expression_shape(expr)
         if got is None or got[1] in shapes or not binds:
@@ -242,16 +249,18 @@ def _shapes(scene: GltfScene, parts: list[Piece], frame: Frame
         for pc in parts:
             m = pc.mesh
             acc = None
+            used: list[Bind] = []
             for mi, k, w in binds:
                 if mi == pc.src and m.morph_deltas is not None and 0 <= k < len(m.morph_deltas):
                     d = gain * w * frame.apply_vector(m.morph_deltas[k])
                     acc = d if acc is None else acc + d
+                    used.append((mi, k, gain * w))
             if acc is not None and np.any(np.abs(acc) > 1e-7):
-                add(name, pc.name, acc, f"VRM {expr}")
+                add(name, pc.name, acc, f"VRM {expr}", used)
         rows.append({"mesh": "(VRM)", "morph": expr, "kind": kind, "as": name,
                      "how": "VRM expression" + (f" ×{gain:.2g} (lookAt range)"
                                                 if gain != 1.0 else "")})
-    return shapes, origin, rows
+    return shapes, origin, rows, links
 
 
 def _eye_aus_on_eyes(shapes: Shapes, origin: dict[str, str], rows: list[dict],
@@ -359,6 +368,7 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     frame = _frame(scene, face.mesh, matches, p)
     lm_idx, lm_pts = landmarks68(frame.apply(face.mesh.vertices), frame.features,
                                  template_landmarks())
+    rest_world = scene.node_world  # lower_arms replaces it
     notes = lower_arms(scene, [pc.mesh for pc in parts], frame.apply, frame.rotation,
                        float(lm_pts[27:31, 0].mean()))
     verts = [frame.apply(pc.mesh.vertices) for pc in parts]
@@ -384,7 +394,7 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
               enumerate(zip(parts, verts, strict=True))
               if pc.role.role == "eyes" and not expression_gaze}
     mesh_objs, materials = _objects(scene, parts, verts, pivots)
-    shapes, origin, rows = _shapes(scene, parts, frame)
+    shapes, origin, rows, links = _shapes(scene, parts, frame)
     _eye_aus_on_eyes(shapes, origin, rows, {parts[i].name for i, c in pivots.items()
                                             if c is not None})
     eyes: dict[str, np.ndarray] = {}
@@ -424,6 +434,10 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
             cover[code] = (src, how.replace("eye rotation + ", "").replace(
                 "eye rotation", "no eye object turns"))
     head.meta["coverage"] = cover
+    head.meta["gltf"] = AvatarSource(
+        p, scene, rest_world, frame, {pc.name: (pc.src, pc.mesh.index) for pc in parts},
+        {n: [b for obj, bs in per.items() if obj in shapes.get(n, {}) for b in bs]
+         for n, per in links.items()}, bones)
     log.info("%s: %s; %d of its morphs used", p, frame.describe(),
              sum(r["kind"] not in ("unused", "duplicate", "empty", "eye turn") for r in rows))
     return head, rig

@@ -98,6 +98,10 @@ class SceneMesh:
     weights: np.ndarray | None = None  #: (N, 4)
     mesh_name: str = ""  #: the glTF mesh's own name (``name`` is the node's)
     bind: SkinBind | None = None
+    #: glTF primitive index → (first vertex, count) of its vertices in the whole mesh
+    ranges: dict[int, tuple[int, int]] = field(default_factory=dict)
+    #: the vertices' indices in the whole mesh (None: this is the whole mesh)
+    index: np.ndarray | None = None
 
     def subset(self, prims: list[tuple[int, np.ndarray]], name: str) -> SceneMesh:
         """The mesh of primitives ``prims`` ((material, triangles) over this mesh's vertices)
@@ -113,7 +117,8 @@ class SceneMesh:
                          [(k, new[f]) for k, f in prims],
                          sub(self.uvs), list(self.morph_names), sub(self.morph_deltas, 1),
                          sub(self.joints), sub(self.weights), self.mesh_name,
-                         None if self.bind is None else self.bind.subset(keep))
+                         None if self.bind is None else self.bind.subset(keep), self.ranges,
+                         keep if self.index is None else self.index[keep])
 
     def posed(self, rest: np.ndarray, world: np.ndarray) -> None:
         """Place the mesh again for node world matrices ``world`` (rest: ``rest``): skinned
@@ -352,8 +357,9 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
     verts, uvs, faces, joints, weights = [], [], [], [], []
     targets: list[list[np.ndarray]] = []
     seen: dict[int, int] = {}
+    ranges: dict[int, tuple[int, int]] = {}
     base = 0
-    for prim in mesh.primitives:
+    for k_prim, prim in enumerate(mesh.primitives):
         if prim.mode not in (None, 4):
             continue  # only triangle lists
         a = prim.attributes
@@ -384,6 +390,7 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
                 tl.append(d)
             targets.append(tl)
             base += len(v)
+        ranges[k_prim] = (off, len(verts[list(seen).index(a.POSITION)]))
         idx = (r.accessor(prim.indices).reshape(-1) if prim.indices is not None
                else np.arange(len(verts[-1])))
         if len(idx) % 3:
@@ -444,7 +451,7 @@ def _mesh_node(r: _Reader, ni: int, world: np.ndarray) -> SceneMesh | None:
     name = node.name or mesh.name or f"mesh{node.mesh}"
     return SceneMesh(name, ni, v, faces, uv, names,
                      None if deltas is None else deltas.astype(np.float32), jt, wt,
-                     mesh.name or "", bind)
+                     mesh.name or "", bind, ranges)
 
 
 def read_gltf(path: str | Path) -> GltfScene:

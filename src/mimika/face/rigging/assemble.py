@@ -27,19 +27,27 @@ from mimika.face.morphs import table as morph_table
 from mimika.face.rigging.generate import Shapes, available, generate_shapes
 from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet, load_table
 
-__all__ = ["AvatarRig", "Coverage", "build_rig", "head_anchors"]
+__all__ = ["AvatarRig", "Coverage", "SparseShapes", "build_rig", "head_anchors"]
 
 #: AU → (source, detail) — source: facs | arkit | viseme | fields | mixed | rotation
 Coverage = dict[str, tuple[str, str]]
 
 
+#: generated shapes kept sparse: name → object → (moving vertex indices, their deltas in cm)
+SparseShapes = dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]
+
+
 class AvatarRig(BlendshapeRig):
     """A :class:`BlendshapeRig` whose head-motion weight may come from a skin (the weight of
-    the head bone and its children per vertex) instead of the chin → neck fall-off."""
+    the head bone and its children per vertex) instead of the chin → neck fall-off. It keeps
+    its AU ``table`` and the shapes it ``generated`` (for an export that adds only those to
+    the avatar's own morphs)."""
 
     def __init__(self, head: Head, shapes: ShapeSet, table: Mapping,
                  head_weight: np.ndarray | None = None) -> None:
         super().__init__(head, shapes, table)
+        self.table = table
+        self.generated: SparseShapes = {}
         if head_weight is not None:
             w = np.clip(np.asarray(head_weight, np.float32), 0.0, 1.0)
             self.neck_weight = w
@@ -143,6 +151,12 @@ def build_rig(head: Head, shapes: Shapes, origins: Mapping[str, str], *,
                 arr[k] = d
         deltas[o.name] = arr
     rig = AvatarRig(head, ShapeSet(names, deltas), table, head_weight)
+    for n in (n for n in names if n not in shapes):
+        rig.generated[n] = {}
+        for obj, d in all_shapes[n].items():
+            idx = np.flatnonzero(np.abs(d).max(1) > 0)
+            if len(idx):
+                rig.generated[n][obj] = (idx, np.asarray(d[idx], np.float32))
     return rig, cover
 
 

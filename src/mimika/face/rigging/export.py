@@ -22,29 +22,7 @@ def arkit_shapes(shapes: Shapes) -> dict[str, dict[str, np.ndarray]]:
 
 
 def _view(b, arr: np.ndarray) -> int:
-    a = np.ascontiguousarray(arr)
-    while len(b.bin) % 4:
-        b.bin.append(0)
-    b.views.append({"buffer": 0, "byteOffset": len(b.bin), "byteLength": a.nbytes})
-    b.bin += a.tobytes()
-    return len(b.views) - 1
-
-
-def _sparse(b, d: np.ndarray) -> int:
-    """A sparse VEC3 accessor of deltas ``d`` (N, 3): only the vertices that move are stored
-    (a face shape moves a few thousand of a body's vertices)."""
-    ids = np.flatnonzero(np.abs(d).max(1) > 0).astype(np.uint32)
-    vals = d[ids].astype(np.float32)
-    lo, hi = vals.min(0), vals.max(0)
-    if len(ids) < len(d):  # the vertices left out are 0
-        lo, hi = np.minimum(lo, 0), np.maximum(hi, 0)
-    b.accessors.append({
-        "componentType": 5126, "count": len(d), "type": "VEC3",
-        "min": lo.astype(float).tolist(), "max": hi.astype(float).tolist(),
-        "sparse": {"count": len(ids),
-                   "indices": {"bufferView": _view(b, ids), "componentType": 5125},
-                   "values": {"bufferView": _view(b, vals)}}})
-    return len(b.accessors) - 1
+    return b.add_bytes(np.ascontiguousarray(arr).tobytes())
 
 
 def _repack(doc: dict, binary: bytes, b) -> object:
@@ -64,7 +42,7 @@ def _repack(doc: dict, binary: bytes, b) -> object:
         raw = np.frombuffer(binary, dt, acc["count"] * width, v["byteOffset"]).reshape(
             acc["count"], width)
         if i in sparse_ids:
-            new_index[i] = _sparse(b, raw)
+            new_index[i] = b.add_sparse(raw)
             continue
         vi = _view(b, raw)
         if "target" in v:
@@ -105,7 +83,7 @@ def write_rigged(path: str | Path, rig: Rig, extra: Mapping[str, Mapping[str, np
             continue
         prims = mesh["primitives"]
         targets = list(prims[0].get("targets", []))
-        targets += [{"POSITION": _sparse(b, (d * SCALE).astype(np.float32))} for _, d in new]
+        targets += [{"POSITION": b.add_sparse(d * SCALE)} for _, d in new]
         for prim in prims:
             prim["targets"] = targets
         names = [*mesh.get("extras", {}).get("targetNames", []), *(n for n, _ in new)]
