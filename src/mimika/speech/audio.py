@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import io
 import os
 import wave
@@ -69,9 +70,15 @@ def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
 def read_media(path: str | os.PathLike) -> tuple[np.ndarray, int]:
     """Read speech from a WAV file, or from any audio/video file FFmpeg decodes (MP3, M4A,
     FLAC, OGG, MP4 … through PyAV); mono float32 and the rate in Hz."""
+    from mimika.speech.wavread import Unsupported
+
     p = Path(path)
     if p.suffix.lower() in (".wav", ".wave"):
-        return read_wav(p)
+        try:
+            return read_wav(p)
+        except Unsupported:  # A-law, ADPCM, RF64 …: FFmpeg's, when PyAV is there
+            if importlib.util.find_spec("av") is None:
+                raise
     if not p.is_file():
         raise DataError(f"audio file {str(p)!r} does not exist")
     try:
@@ -86,8 +93,8 @@ def read_media(path: str | os.PathLike) -> tuple[np.ndarray, int]:
             st = c.streams.audio[0]
             what = repr(str(p))
             if getattr(st, "codec_context", None) is None:
-                raise DataError(f"{what}: its audio is in a format FFmpeg cannot decode; "
-                                "convert it to WAV")
+                raise DataError(f"{what}: its audio is in a format FFmpeg does not decode; "
+                                "export it again as PCM WAV, FLAC or MP3")
             rate = int(st.rate or 0)
             secs = (float(st.duration * st.time_base) if st.duration and st.time_base
                     else (c.duration or 0) / 1e6)

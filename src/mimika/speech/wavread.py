@@ -27,6 +27,10 @@ _PCM, _FLOAT, _EXTENSIBLE = 1, 3, 0xFFFE
 _CONVERT = "convert it, e.g. 'ffmpeg -i IN -ac 1 -c:a pcm_s16le OUT.wav'"
 
 
+class Unsupported(DataError):
+    """A WAV file in a sample format this reader leaves to FFmpeg (A-law, ADPCM, RF64 …)."""
+
+
 def _chunks(fh, size: int, name: str) -> tuple[bytes, int, int, int]:
     """(fmt body, data offset, bytes of data the header declares, bytes of it the file
     holds) of an open RIFF WAVE file of ``size`` bytes. A data size of 0 or 0xFFFFFFFF (a WAV
@@ -63,8 +67,8 @@ def _format(fmt: bytes, name: str) -> tuple[int, int, int, int]:
     ok = {_PCM: (1, 2, 3, 4), _FLOAT: (4, 8)}
     if tag not in ok or bits % 8 or width not in ok[tag]:
         kind = {_PCM: "PCM", _FLOAT: "float"}.get(tag, f"format {tag}")
-        raise DataError(f"{name}: {kind} WAV with {bits}-bit samples cannot be read (PCM 8/16/"
-                        f"24/32-bit or float 32/64-bit); {_CONVERT}")
+        raise Unsupported(f"{name}: {kind} WAV with {bits}-bit samples cannot be read (PCM 8/"
+                          f"16/24/32-bit or float 32/64-bit); {_CONVERT}")
     if channels < 1:
         raise DataError(f"{name}: the WAV header declares no channels; {_CONVERT}")
     return tag, channels, rate, width
@@ -97,6 +101,8 @@ def read_wav(path: str | os.PathLike) -> tuple[np.ndarray, int]:
         with open(p, "rb") as fh:
             size = os.fstat(fh.fileno()).st_size
             riff = fh.read(12)
+            if riff[:4] in (b"RF64", b"BW64") and riff[8:12] == b"WAVE":
+                raise Unsupported(f"{name}: an RF64 WAV; {_CONVERT}")
             if len(riff) < 12 or riff[:4] != b"RIFF" or riff[8:12] != b"WAVE":
                 raise DataError(f"cannot read {name} as PCM WAV (no RIFF/WAVE header); "
                                 f"{_CONVERT}")
