@@ -24,24 +24,13 @@ uniform float u_specular;
 uniform float u_roughness;
 uniform vec3 u_mix;        // share of blurred irradiance per channel
 uniform float u_backface;
-uniform float u_exposure;
 uniform float u_ao;
 uniform vec3 u_mucosa;
 #include "skin_light.glsl"
 
+#include "tone.glsl"
+
 out vec4 f_color;
-
-vec3 to_srgb(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
-}
-
-vec3 tonemap(vec3 c) {
-    vec3 x = c * u_exposure;
-    vec3 knee = vec3(0.8);
-    vec3 over = max(x - knee, 0.0);
-    return min(x, knee) + over / (1.0 + over / (1.0 - knee.x));
-}
 
 vec3 specular(vec3 n, vec3 v, vec3 l, vec3 col) {
     float ndl = dot(n, l);
@@ -85,7 +74,7 @@ void main() {
     vec3 base = u_base;
     if (u_textured) {
         vec4 a = texture(u_albedo, v_tex);
-        base = a.rgb * (a.rgb * (a.rgb * 0.305306011 + 0.682171111) + 0.012522878);  // sRGB
+        base = srgb_decode(a.rgb);
         spec *= a.a;
     }
     base = mix(base, u_mucosa, v_occ.z);
