@@ -69,6 +69,15 @@ def get_context() -> Any:
         return ctx
 
 
+def has_uniform(prog: Any, name: str) -> bool:
+    """True if the program ``prog`` has the uniform ``name`` (a variant may have compiled it
+    away). ``name in prog`` walks every member in moderngl; the names are kept in
+    ``prog.extra`` after the first call."""
+    if prog.extra is None:
+        prog.extra = frozenset(prog)
+    return name in prog.extra
+
+
 def egl_available() -> bool:
     """True if the shared headless context can be created (creates it if needed)."""
     try:

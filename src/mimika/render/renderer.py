@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from mimika.errors import ParameterError, RenderError
 from mimika.face.head import Head, MeshObject, Part
 from mimika.render.camera import Camera, check_view, frame_head
-from mimika.render.context import get_context, render_lock
+from mimika.render.context import get_context, has_uniform, render_lock
 from mimika.render.lighting import Lighting, parse_light, set_lights, unit
 from mimika.render.mouth import MouthCavity
 from mimika.render.occlusion import light_view, ortho
@@ -359,7 +359,7 @@ def wrinkle_reach(ctx: Any, face: np.ndarray, faces: np.ndarray,
         prog["u_box"].value = (*lo, *(1.0 / (hi - lo)))
         write_wrinkles(prog, np.ones(28, np.float32).tobytes())  # every group has depth
         for name, value in landmarks.items():
-            if name in prog:
+            if has_uniform(prog, name):
                 prog[name].value = value
         prog["u_first"].value = 0
         tris.render(ctx.TRIANGLES)
@@ -690,7 +690,7 @@ class Renderer:
                             ("u_alpha_mode", mode),
                             ("u_backface", BACKFACE if mode == _OPAQUE else 1.0),
                             ("u_tint", float(m.name in SKIN_LIKE))):
-            if name in prog:  # a variant may have compiled a uniform away
+            if has_uniform(prog, name):  # a variant may have compiled a uniform away
                 prog[name].value = value
         if tex is not None:
             tex.use(location=0)
@@ -717,7 +717,7 @@ class Renderer:
                             fragment_shader=_shader("mesh.frag.glsl", *key))
             set_lights(p, self.lighting)
             for name, value in (("u_backface", BACKFACE), ("u_mucosa", MUCOSA)):
-                if name in p:  # the depth-only variant has no lights
+                if has_uniform(p, name):  # the depth-only variant has no lights
                     p[name].value = value
             if getattr(self, "_view", None) is not None:
                 p["u_view"].write(self._view[0])
@@ -794,18 +794,18 @@ class Renderer:
     @staticmethod
     def _set_shadow(prog: Any, shadow: dict) -> None:
         for name, value in shadow.items():
-            if name not in prog:
+            if not has_uniform(prog, name):
                 continue
             if name == "u_shadow_matrix":
                 prog[name].write(value)
             else:
                 prog[name].value = value
-        if "u_shadow_map" in prog:
+        if has_uniform(prog, "u_shadow_map"):
             prog["u_shadow_map"].value = 3
 
     def _set_landmarks(self, prog: Any) -> None:
         for name, value in self._wrinkles.uniforms.items():
-            if name in prog:
+            if has_uniform(prog, name):
                 prog[name].value = value
 
     def _draw_part(self, gl: dict, ctx: Any, o: _GpuObject, mat: Material, first: int,
@@ -952,7 +952,7 @@ class Renderer:
                 self._skin = SkinShader(ctx, self._objects, uvs, lit, params,
                                         ("SHADOWS",) if self._shadows else (), ("WRINKLES",))
                 for p in self._skin.programs:
-                    if "u_mucosa" in p:
+                    if has_uniform(p, "u_mucosa"):
                         p["u_mucosa"].value = MUCOSA
                     self._set_landmarks(p)
             else:

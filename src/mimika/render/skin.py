@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from mimika.render.context import has_uniform
 from mimika.render.lighting import V3, Lighting, set_lights
 
 log = logging.getLogger(__name__)
@@ -61,7 +62,7 @@ class SkinParams:
 def write_wrinkles(prog: Any, depths: bytes | None) -> None:
     """Set ``u_wr``, the wrinkle groups' depths (28 floats; None: all 0), where ``prog`` has it
     (a program with only some groups compiled in keeps the array up to the last it uses)."""
-    if "u_wr" in prog:
+    if has_uniform(prog, "u_wr"):
         u = prog["u_wr"]
         u.write((depths or bytes(4 * 28))[: 4 * u.array_length])
 
