@@ -7,6 +7,10 @@ import { readFileSync } from "node:fs";
 globalThis.self = globalThis;
 globalThis.createImageBitmap = async () => ({ width: 1, height: 1, close() {} });
 globalThis.Blob = globalThis.Blob ?? class {};
+// EXT_texture_webp asks an Image whether WebP decodes: say it does (1×1 after loading)
+globalThis.Image = globalThis.Image ?? class {
+  set src(_v) { this.height = 1; setTimeout(() => this.onload && this.onload()); }
+};
 import { GLTFLoader } from "three/examples/jsm/loaders/GLTFLoader.js";
 
 const buf = readFileSync(process.argv[2]);
