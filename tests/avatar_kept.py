@@ -1,5 +1,6 @@
 """Test avatars for the faithful export, written by the tests from mimika's builtin export:
-a skeleton of six joints turned as Blender exports them, ARKit-named morphs (one of them
+a skeleton of six joints turned as Blender exports them under a 0.01 scale (the head joint
+a matrix), ARKit-named morphs (one of them
 empty), a custom morph, named PBR materials with a JPEG base colour shared by two materials,
 normal, occlusion/metallic-roughness (one image) and emissive maps, KHR_texture_transform,
 a MASK material — and a player-side evaluation of an animated glTF (morph weights, skinning,
@@ -25,8 +26,18 @@ ARKIT = {"AU26": "jawOpen", "AU12L": "mouthSmileLeft", "AU12R": "mouthSmileRight
 JOINTS = {"Hips": (None, (-90.0, 0.0, 0.0)), "Spine": (None, (-80.0, 0.0, 10.0)),
           "Neck": ("neck", (-75.0, 0.0, 0.0)), "Head": ("head", (-90.0, 5.0, 0.0)),
           "LeftEye": ("eye_L", (0.0, 180.0, 0.0)), "RightEye": ("eye_R", (0.0, 180.0, 0.0))}
+#: the world scale of every joint (an armature in cm placed in a metre scene)
+ARMATURE_SCALE = 0.01
 MATERIALS = {"skin": "Wolf3D_Skin", "lips": "Wolf3D_Lips", "brow": "Wolf3D_Brows",
              "sclera": "Wolf3D_Eye", "teeth": "Wolf3D_Teeth"}
+
+
+def _trs(m: np.ndarray) -> dict:
+    """A rigid, uniformly scaled 4×4 matrix as glTF translation, rotation and scale."""
+    s = float(np.cbrt(np.linalg.det(m[:3, :3])))
+    return {"translation": m[:3, 3].tolist(),
+            "rotation": Rotation.from_matrix(m[:3, :3] / s).as_quat().tolist(),
+            "scale": [s] * 3}
 
 
 def _image(fmt: str, size: int, rgba: bool = False, seed: int = 0) -> bytes:
@@ -102,9 +113,9 @@ def arkit_avatar(src: Path, dst: Path) -> Path:
     joint_world = {}
     pos = {"Hips": world0[names["neck"], :3, 3] - [0, 0.35, 0],
            "Spine": world0[names["neck"], :3, 3] - [0, 0.15, 0]}
-    for j, (old, rv) in JOINTS.items():
+    for j, (old, rv) in JOINTS.items():  # an armature in cm under a 0.01 scale (FBX-like)
         m = np.eye(4)
-        m[:3, :3] = Rotation.from_rotvec(np.radians(rv)).as_matrix()
+        m[:3, :3] = Rotation.from_rotvec(np.radians(rv)).as_matrix() * ARMATURE_SCALE
         m[:3, 3] = pos[j] if old is None else world0[names[old], :3, 3]
         joint_world[j] = m
     parents = {"Hips": None, "Spine": "Hips", "Neck": "Spine", "Head": "Neck",
@@ -114,8 +125,9 @@ def arkit_avatar(src: Path, dst: Path) -> Path:
     for j in JOINTS:
         p = parents[j]
         loc = joint_world[j] if p is None else np.linalg.inv(joint_world[p]) @ joint_world[j]
-        doc["nodes"].append({"name": j, "translation": loc[:3, 3].tolist(),
-                             "rotation": Rotation.from_matrix(loc[:3, :3]).as_quat().tolist()})
+        doc["nodes"].append({"name": j, **_trs(loc)})
+        if j == "Head":  # stored as a matrix, as some exporters do
+            doc["nodes"][-1] = {"name": j, "matrix": loc.T.reshape(-1).tolist()}
     for j, p in parents.items():
         if p is not None:
             doc["nodes"][jn[p]].setdefault("children", []).append(jn[j])
@@ -124,8 +136,7 @@ def arkit_avatar(src: Path, dst: Path) -> Path:
         loc = np.linalg.inv(joint_world[j]) @ world0[names[eye]]
         nd = doc["nodes"][names[eye]]
         nd["name"] = {"eye_L": "EyeLeft", "eye_R": "EyeRight"}[eye]
-        nd["translation"] = loc[:3, 3].tolist()
-        nd["rotation"] = Rotation.from_matrix(loc[:3, :3]).as_quat().tolist()
+        nd.update(_trs(loc))
         doc["nodes"][jn[j]]["children"] = [names[eye]]
     for old in ("neck", "head"):
         doc["nodes"][names[old]] = {"name": f"x{len(old)}{old[0]}"}  # unused, not a bone

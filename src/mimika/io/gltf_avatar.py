@@ -76,10 +76,14 @@ def _add_targets(doc: dict[str, Any], b: Any, targets: list[MorphTarget]) -> Non
         names = list((mesh.get("extras") or {}).get("targetNames") or [])
         if len(names) != n_old:
             names = [f"morph{k}" for k in range(n_old)]
+        made: dict[int, int] = {}  # primitives sharing a vertex array share the target
         for pi, prim in enumerate(prims):
-            count = doc["accessors"][prim["attributes"]["POSITION"]]["count"]
-            d = t.deltas.get(pi)
-            acc = b.add_sparse(d if d is not None else np.zeros((count, 3), np.float32))
+            pos = prim["attributes"]["POSITION"]
+            if pos not in made:
+                d = t.deltas.get(pi)
+                made[pos] = b.add_sparse(d if d is not None else np.zeros(
+                    (doc["accessors"][pos]["count"], 3), np.float32))
+            acc = made[pos]
             tl = prim.setdefault("targets", [])
             if t.replaces is not None:
                 tl[t.replaces] = {**tl[t.replaces], "POSITION": acc}
