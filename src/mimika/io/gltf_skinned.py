@@ -20,6 +20,7 @@ Layout (metres; the character is modelled in cm)::
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 import numpy as np
@@ -47,6 +48,30 @@ def _morph_codes(rig: Any) -> list[str]:
     """AUs (and sides) with shape offsets: the morph targets, in catalogue order."""
     return [c for c in rig.supported if c in AU_CATALOGUE or c[:4] in AU_CATALOGUE
             if AU_CATALOGUE[c[:4]].group != "head" and rig.shape_deltas(c)]
+
+
+_TARGETS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _targets(rig: Any) -> tuple[list[str], dict[str, list[tuple[str, np.ndarray]]]]:
+    """The morph AUs and the targets per object — (AU, read-only delta in metres), empty ones
+    left out — cached per rig: they depend on it only, and read-only arrays keep their bounds
+    too (:func:`mimika.io.gltf._derived`), so a pose export does not recompute either."""
+    if rig not in _TARGETS:
+        codes = _morph_codes(rig)
+        deltas = {c: rig.shape_deltas(c) for c in codes}
+        out: dict[str, list[tuple[str, np.ndarray]]] = {}
+        for o in rig.bind_head.objects:
+            out[o.name] = []
+            for c in codes:
+                d = deltas[c].get(o.name)
+                if d is None or np.abs(d).max() <= 1e-6:
+                    continue
+                t = (d * SCALE).astype(np.float32)
+                t.setflags(write=False)
+                out[o.name].append((c, t))
+        _TARGETS[rig] = codes, out
+    return _TARGETS[rig]
 
 
 def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | None = None,
@@ -80,8 +105,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
     skin = {"name": "skeleton", "joints": list(range(nb)), "skeleton": 0,
             "inverseBindMatrices": b.add(ibm.reshape(nb, 16), "MAT4", _FLOAT)}
 
-    codes = _morph_codes(rig)
-    deltas = {c: rig.shape_deltas(c) for c in codes}
+    codes, morphs = _targets(rig)
     head_j = sk.names.index("head")
     meshes: list[dict] = []
     roots = [0]
@@ -96,13 +120,9 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
             attrs["JOINTS_0"] = b.add(joints, "VEC4", _USHORT, target=_ARRAY)
             attrs["WEIGHTS_0"] = b.add(wts, "VEC4", _FLOAT, target=_ARRAY)
         names, targets = [], []
-        for c in codes:
-            d = deltas[c].get(o.name)
-            if d is None or eye or np.abs(d).max() <= 1e-6:
-                continue
+        for c, d in [] if eye else morphs.get(o.name, []):
             names.append(c)
-            targets.append({"POSITION": b.add((d * SCALE).astype(np.float32), "VEC3",
-                                              _FLOAT, target=_ARRAY, minmax=True)})
+            targets.append({"POSITION": b.add(d, "VEC3", _FLOAT, target=_ARRAY, minmax=True)})
         meshes.append(_object_mesh(b, mats, o, attrs, targets, names))
         node = {"name": o.name, "mesh": len(meshes) - 1}
         nodes.append(node)
