@@ -16,6 +16,7 @@ import pytest
 
 from avatar_files import vrm
 from avatar_kept import JOINTS, arkit_avatar, posed
+from blender_app import blender_import, needs_blender
 from mimika.cli import main
 from mimika.face.heads import load_head
 from mimika.face.heads.gltf_export import avatar_export
@@ -249,3 +250,23 @@ def test_generic_export_stores_a_shared_image_once(tmp_path):
     d = out.read_bytes()
     doc = json.loads(d[20:20 + struct.unpack_from("<I", d, 12)[0]])
     assert len(doc["images"]) == 1 and len(doc["textures"]) == 1
+
+
+@needs_blender
+def test_blender_imports_the_export(avatar, rendered):
+    """Headless Blender (skipped without it): the file's armature and bones, its materials
+    with their images, and shape keys under the avatar's own names driven by the action."""
+    rep = blender_import(rendered, mimika_timing=True)
+    arma = rep.objects("ARMATURE")
+    assert len(arma) == 1 and arma[0]["bones"] == list(JOINTS)
+    assert rep.action(arma[0]["action"])["fcurves"] == 12  # Head, LeftEye, RightEye
+    mesh = {o["mesh"]: o for o in rep.objects("MESH")}
+    face = mesh["Wolf3D_Head"]
+    assert {"jawOpen", "mouthSmileLeft", "customSmirk", "mouthFunnel", "browOuterUpLeft"} <= set(
+        face["shape_keys"])
+    assert face["vertex_groups"] == list(JOINTS) and face["modifiers"] == ["ARMATURE"]
+    assert 'key_blocks["jawOpen"].value' in rep.action(face["shape_key_action"])["data_paths"]
+    assert face["materials"][:2] == ["Wolf3D_Skin", "Wolf3D_Lips"]
+    mats = {m["name"]: m for m in rep["materials"]}
+    assert mats["Wolf3D_Skin"]["textures"] == ["skin_color", "skin_normal", "skin_orm"]
+    assert mats["Wolf3D_Brows"]["textures"] == ["brows"]
