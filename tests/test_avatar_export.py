@@ -270,3 +270,18 @@ def test_blender_imports_the_export(avatar, rendered):
     mats = {m["name"]: m for m in rep["materials"]}
     assert mats["Wolf3D_Skin"]["textures"] == ["skin_color", "skin_normal", "skin_orm"]
     assert mats["Wolf3D_Brows"]["textures"] == ["brows"]
+
+
+def test_studio_download_keeps_the_avatar(avatar, tmp_path):
+    """The studio's GLB download of a pose (and of a project) takes the same path; the
+    page's own head.glb keeps mimika's layout (its viewer drives AU morphs by name)."""
+    from mimika.studio.state import StudioState
+
+    st = StudioState(tmp_path / "projects", head=str(avatar))
+    out = tmp_path / "pose.glb"
+    out.write_bytes(st.pose_glb(None, {"AU26": 1.0}, fps=25, label="jaw"))
+    assert _doc(out)[0]["materials"] == _doc(avatar)[0]["materials"]
+    assert _weights(out, "Wolf3D_Head", "jawOpen").tolist() == pytest.approx([0.55, 0.55])
+    page = tmp_path / "page.glb"
+    page.write_bytes(st.glb()[0])
+    assert "AU26" in json.dumps(_doc(page)[0]["meshes"])

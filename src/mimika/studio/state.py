@@ -68,13 +68,20 @@ class SpeechEntry:
         return (np.concatenate(parts) if parts else np.zeros(0, np.float32)), int(sr)
 
 
-def gltf_bytes(rig: Any, track: Any, *, name: str = "mimika") -> bytes:
-    """``rig``'s head (+ ``track``'s animation) as GLB bytes, through :func:`write_gltf`."""
+def gltf_bytes(rig: Any, track: Any, *, name: str = "mimika", keep: bool = False) -> bytes:
+    """``rig``'s head (+ ``track``'s animation) as GLB bytes, through :func:`write_gltf`;
+    with ``keep`` (a download), an avatar file is written again with the animation added
+    (:mod:`mimika.io.gltf_avatar`) instead of in the page's layout."""
+    from mimika.face.heads.gltf_export import avatar_export
     from mimika.io.gltf import write_gltf
+    from mimika.io.gltf_avatar import write_avatar_gltf
     from mimika.render.appearance import export_appearance
     from mimika.studio.jobs import temp_dir
 
     with temp_dir() as d:
+        kept = avatar_export(rig, track) if keep else None
+        if kept is not None:
+            return write_avatar_gltf(d / f"{name}.glb", kept, track).read_bytes()
         attributes, extras = export_appearance(rig.head)
         return write_gltf(d / f"{name}.glb", rig, track, attributes=attributes,
                           extras=extras).read_bytes()
@@ -192,7 +199,7 @@ class StudioState:
                 self._poses.move_to_end(key)
                 return self._poses[key]
         data = gltf_bytes(self.rig(name), AUTrack.constant(aus, n_frames=1, fps=fps),
-                          name=label)
+                          name=label, keep=True)
         with self._pose_lock:
             self._poses[key] = data
             while len(self._poses) > POSES:

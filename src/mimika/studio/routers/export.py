@@ -102,7 +102,7 @@ async def export_gltf(req: ExportRequest, request: Request, job: str | None = No
             return st.pose_glb(req.head, req.aus or {}, fps=req.fps, label=req.name)
         track = _track(st, req, proj, j)
         j.check()
-        return gltf_bytes(_rig(st, req, proj), track, name=req.name)
+        return gltf_bytes(_rig(st, req, proj), track, name=req.name, keep=True)
 
     data = await _run(request, req, "glTF", work, frames, job)
     return _attachment(data, "model/gltf-binary", f"{req.name}.glb")
