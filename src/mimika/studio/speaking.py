@@ -47,12 +47,19 @@ def sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
 
 def synth_segment(state: StudioState, text: str, char0: int, t0: float, *, lang: str,
                   rate: int, fps: float) -> SpeechSegment:
-    """Synthesise one sentence (the default voice for ``lang``, serialised) and its mouth
+    """Synthesise one sentence (the default voice for ``lang``, serialised; kept by the
+    state, so a sentence is synthesised once whatever text it comes in) and its mouth
     track."""
     from mimika.speech import mouth_track, synthesize
 
-    with state.espeak_lock:
-        utt = synthesize(text, lang=lang, rate=rate)
+    key = (text, lang, rate)
+    utt = state.sentence(key)
+    if utt is None:
+        with state.espeak_lock:
+            utt = state.sentence(key)  # a request waiting for the lock may find it made
+            if utt is None:
+                utt = synthesize(text, lang=lang, rate=rate)
+                state.put_sentence(key, utt)
     return SpeechSegment(text, char0, t0, utt, mouth_track(utt, fps=fps))
 
 

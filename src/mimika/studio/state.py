@@ -23,6 +23,8 @@ log = logging.getLogger(__name__)
 VIDEO_MODULES = ("mimika.news", "mimika.newsreader")
 #: pose GLBs kept (a character's is 23 MB)
 POSES = 3
+#: synthesised sentences kept (also at most half of ``max_cache_mb``)
+SENTENCES = 256
 
 
 @dataclass
@@ -119,6 +121,8 @@ class StudioState:
         self._heads: OrderedDict[str, list[Any]] = OrderedDict()
         self._heads_max = heads_cache
         self._poses: OrderedDict[tuple, bytes] = OrderedDict()
+        self._sentences: OrderedDict[tuple, Any] = OrderedDict()
+        self._sentence_bytes = 0
         self._pose_lock = threading.Lock()
         self._lib_lock = threading.Lock()
         self.espeak_lock = threading.Lock()  # espeak-ng is not re-entrant
@@ -268,6 +272,26 @@ class StudioState:
             if e is not None:
                 self._speech.move_to_end(key)
             return e
+
+    def sentence(self, key: tuple) -> Any:
+        """The synthesised utterance of one sentence ``(text, lang, rate)``, or None: a
+        sentence spoken before, alone or in another text, is not synthesised again."""
+        with self._speech_lock:
+            utt = self._sentences.get(key)
+            if utt is not None:
+                self._sentences.move_to_end(key)
+            return utt
+
+    def put_sentence(self, key: tuple, utt: Any) -> None:
+        """Keep ``utt``; the oldest go over :data:`SENTENCES` or half of ``max_cache_mb``."""
+        cap = limits.current().max_cache_mb * 1e6 / 2
+        with self._speech_lock:
+            old = self._sentences.pop(key, None)
+            self._sentence_bytes += utt.audio.nbytes - (old.audio.nbytes if old else 0)
+            self._sentences[key] = utt
+            while len(self._sentences) > 1 and (len(self._sentences) > SENTENCES or
+                                                self._sentence_bytes > cap):
+                self._sentence_bytes -= self._sentences.popitem(last=False)[1].audio.nbytes
 
     # -- optional features -------------------------------------------------------------------
     def controller(self) -> tuple[Any, str | None]:
