@@ -205,7 +205,7 @@ def test_export_passes_the_validator_and_loads_in_three(avatar, rendered):
 
 @pytest.mark.skipif(not GLTF_TRANSFORM.exists() or not HAS_VALIDATOR,
                     reason="@gltf-transform/cli not installed (scripts/setup-node.sh)")
-def test_packed_avatar_keeps_webp_and_decodes_meshopt(avatar, rendered, tmp_path):
+def test_packed_and_gltf_avatars_keep_their_images(avatar, rendered, tmp_path):
     webp, packed = tmp_path / "webp.glb", tmp_path / "packed.glb"
     for cmd, a, b in (("webp", avatar, webp), ("meshopt", webp, packed)):
         subprocess.run([str(GLTF_TRANSFORM), cmd, str(a), str(b)], check=True,
@@ -225,6 +225,18 @@ def test_packed_avatar_keeps_webp_and_decodes_meshopt(avatar, rendered, tmp_path
     assert _weights(out, "Wolf3D_Head", "jawOpen").max() > 0.5
     assert _node("validate.mjs", out)["numErrors"] == 0
     assert _node("three_load.mjs", out)["bones"] == len(JOINTS)
+    # a .gltf with its .bin and images beside it: the images are embedded, as they were
+    folder = tmp_path / "gltf"
+    folder.mkdir()
+    subprocess.run([str(GLTF_TRANSFORM), "copy", str(avatar), str(folder / "a.gltf")],
+                   check=True, capture_output=True, timeout=300)
+    assert (folder / "baseColor_1.jpg").is_file()
+    out = tmp_path / "from_gltf.glb"
+    assert main(["render", "--head", str(folder / "a.gltf"), str(script), "-o", str(out),
+                 "-q"]) == 0
+    assert sorted(_images(out)) == sorted(_images(folder / "a.gltf"))
+    assert "image/jpeg" in {m for _, m, _ in _images(out)}
+    assert _node("validate.mjs", out)["numErrors"] == 0
 
 
 def test_heads_without_a_file_keep_the_mimika_layout():

@@ -19,11 +19,14 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import logging
 from typing import Any
 
 from mimika.errors import DataError
 from mimika.io.gltf import _Builder
 from mimika.io.gltf_source import GltfSource
+
+log = logging.getLogger(__name__)
 
 __all__ = ["MESHOPT", "image_mime", "repack"]
 
@@ -33,14 +36,13 @@ _MAGIC = ((b"\x89PNG", "image/png"), (b"\xff\xd8\xff", "image/jpeg"),
           (b"RIFF", "image/webp"), (b"\xabKTX", "image/ktx2"))
 
 
-def image_mime(data: bytes, declared: Any = None) -> str:
-    """The MIME type of encoded image ``data``: from its magic bytes, else ``declared``."""
+def image_mime(data: bytes, declared: Any = None) -> str | None:
+    """The MIME type of encoded image ``data``: from its magic bytes, else ``declared``
+    (None when neither says)."""
     for magic, mime in _MAGIC:
         if data.startswith(magic) and (mime != "image/webp" or data[8:12] == b"WEBP"):
             return mime
-    if isinstance(declared, str) and declared.startswith("image/"):
-        return declared
-    raise DataError("an image is neither PNG, JPEG, WebP nor KTX2; export the file again")
+    return declared if isinstance(declared, str) and declared.startswith("image/") else None
 
 
 def _view_refs(doc: dict[str, Any]) -> list[tuple[dict[str, Any], str]]:
@@ -69,8 +71,15 @@ def repack(src: GltfSource) -> tuple[dict[str, Any], _Builder]:
     same: list[int] = []  # per image: the image whose bytes (and bufferView) it uses
     embed: dict[int, bytes] = {}  # images to embed from a uri
     for i, im in enumerate(images):
-        data = src.image_bytes(i)
-        im["mimeType"] = image_mime(data, im.get("mimeType"))
+        try:
+            data = src.image_bytes(i)
+        except DataError as e:  # missing or outside the folder: the reader said so too
+            log.warning("%s; its uri is kept, not embedded", e)
+            same.append(i)
+            continue
+        mime = image_mime(data, im.get("mimeType"))
+        if mime is not None:
+            im["mimeType"] = mime
         same.append(owner.setdefault(hashlib.sha1(data).digest(), i))
         if same[i] == i and im.get("bufferView") is None:
             embed[i] = data
@@ -90,7 +99,7 @@ def repack(src: GltfSource) -> tuple[dict[str, Any], _Builder]:
     for obj, key in _view_refs({**doc, "images": []}):
         obj[key] = new_index[obj[key]]
     for i, im in enumerate(images):  # owners first: a later image may share an earlier one
-        if same[i] == i:
+        if same[i] == i and (i in embed or im.get("bufferView") is not None):
             im["bufferView"] = (b.add_bytes(embed[i]) if i in embed
                                 else new_index[im["bufferView"]])
             im.pop("uri", None)
