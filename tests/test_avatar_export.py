@@ -297,3 +297,16 @@ def test_studio_download_keeps_the_avatar(avatar, tmp_path):
     page = tmp_path / "page.glb"
     page.write_bytes(st.glb()[0])
     assert "AU26" in json.dumps(_doc(page)[0]["meshes"])
+
+
+def test_a_changed_avatar_file_is_refused(avatar, tmp_path):
+    """The export writes the file again by the indices read when the head loaded: a file
+    changed since (the studio runs for hours) is one clear error, not a broken GLB."""
+    from mimika.errors import DataError
+
+    p = tmp_path / "a.glb"
+    p.write_bytes(avatar.read_bytes())
+    _, rig = load_head(p)
+    p.write_bytes(avatar.read_bytes() + b"    ")
+    with pytest.raises(DataError, match="changed since the head was loaded"):
+        avatar_export(rig, None)

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from mimika.errors import DataError
 from mimika.face.heads.gltf_scene import GltfScene
 from mimika.face.morphs import arkit_name, classify
 from mimika.face.rigging.frame import Frame
@@ -58,6 +59,24 @@ class AvatarSource:
     pieces: dict[str, tuple[int, np.ndarray | None]]
     links: dict[str, list[Bind]]
     bones: dict[str, int | None]
+    stamp: tuple[int, int] = (0, 0)  #: the file's size and mtime when it was read
+
+    def __post_init__(self) -> None:
+        self.stamp = self._stamp()
+
+    def _stamp(self) -> tuple[int, int]:
+        try:
+            st = self.path.stat()
+        except OSError:
+            return (-1, -1)
+        return st.st_size, st.st_mtime_ns
+
+    def check(self) -> None:
+        """Refuse a file that changed (or went) since the head was read from it: the export
+        writes the file again by the indices read then."""
+        if self._stamp() != self.stamp:
+            raise DataError(f"{self.path} changed since the head was loaded from it; load "
+                            "it again (restart the command or the studio)")
 
 
 def _side_values(table: Mapping, track: AUTrack) -> tuple[list[tuple[str, str]], np.ndarray]:
@@ -252,6 +271,7 @@ def avatar_export(rig: Any, track: AUTrack | None) -> AvatarExport | None:
     src = rig.head.meta.get("gltf")
     if not isinstance(src, AvatarSource):
         return None
+    src.check()
     doc = load_source(src.path).doc
     nodes = doc.get("nodes", [])
     ex = AvatarExport(src.path)
