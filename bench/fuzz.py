@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent.parent / "tests"))
-from fuzzing import HANG_SECONDS, TARGETS, check
+from fuzzing import HANG_SECONDS, TARGETS, WALL_SECONDS, check
 
 
 def _peak_mb() -> float:
@@ -50,7 +50,7 @@ def main() -> int:
     total = crashes = hangs = 0
     t_all = time.perf_counter()
     print(f"fuzzing {per * len(names)} cases ({per} per target), a case over "
-          f"{HANG_SECONDS:g} s is a hang", flush=True)
+          f"{HANG_SECONDS:g} s of CPU or {WALL_SECONDS:g} s is a hang", flush=True)
     for name in names:
         gen, run = TARGETS[name]
         seen: dict[str, int] = {}
