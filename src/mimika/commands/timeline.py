@@ -100,10 +100,15 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
         from mimika.face.heads.gltf_export import avatar_export
 
         kept = avatar_export(rig, track)
+        note = ""
         if kept is not None:  # an avatar file: written again, with the animation added
             from mimika.io.gltf_avatar import write_avatar_gltf
 
             write_avatar_gltf(out, kept, track)
+            add, fill = kept.extras["added_morphs"], kept.extras["filled_morphs"]
+            note = (f"; {kept.source.name} kept as it was, its own morphs and joints "
+                    f"animated, {len(add)} morph targets added for shapes it lacked"
+                    + (f", {len(fill)} empty ones filled" if fill else ""))
         else:
             from mimika.io.gltf import write_gltf
             from mimika.render.appearance import export_appearance
@@ -112,8 +117,8 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
             write_gltf(out, rig, track, attributes=attributes, extras=extras)
         last = max(track.n_frames - 1, 1)
         _say(args, f"wrote {out} ({track.n_frames} frames at {track.fps:g} fps, 0–"
-                   f"{last / track.fps:.2f} s, {len(track.channels)} animated AUs; in Blender "
-                   f"set {track.fps:g} fps before importing, frames 0–{last})")
+                   f"{last / track.fps:.2f} s, {len(track.channels)} animated AUs{note}; in "
+                   f"Blender set {track.fps:g} fps before importing, frames 0–{last})")
         return
     from mimika.render import Renderer, contact_sheet, save_png
 
