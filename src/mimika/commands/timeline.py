@@ -108,7 +108,7 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
             add, fill = kept.extras["added_morphs"], kept.extras["filled_morphs"]
             note = (f"; {kept.source.name} kept as it was, its own morphs and joints "
                     f"animated, {len(add)} morph targets added for shapes it lacked"
-                    + (f", {len(fill)} empty ones filled" if fill else ""))
+                    + (f", {len(fill)} empty target(s) filled" if fill else ""))
         else:
             from mimika.io.gltf import write_gltf
             from mimika.render.appearance import export_appearance
