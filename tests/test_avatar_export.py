@@ -310,3 +310,17 @@ def test_a_changed_avatar_file_is_refused(avatar, tmp_path):
     p.write_bytes(avatar.read_bytes() + b"    ")
     with pytest.raises(DataError, match="changed since the head was loaded"):
         avatar_export(rig, None)
+
+
+def test_a_vrm_avatar_exports_as_vrm(builtin_glb, avatar, rendered, tmp_path, capsys):
+    p = vrm(builtin_glb, tmp_path / "v.vrm", 1)
+    script = rendered.with_name("s.xml")
+    out = tmp_path / "out.vrm"
+    assert main(["render", "--head", str(p), str(script), "-o", str(out), "-q"]) == 0
+    assert out.read_bytes()[:4] == b"glTF"
+    assert _doc(out)[0]["extensions"]["VRMC_vrm"] == _doc(p)[0]["extensions"]["VRMC_vrm"]
+    # .vrm out of a plain GLB avatar: one line, exit 2, before any work
+    assert main(["render", "--head", str(avatar), str(script), "-o",
+                 str(tmp_path / "x.vrm")]) == 2
+    err = capsys.readouterr().err
+    assert "is for a VRM avatar" in err and len(err.strip().splitlines()) == 1

@@ -16,7 +16,7 @@ INPUT_FORMATS = (*CSV_FORMATS, "pyfeat")
 READER_FLAGS = {"fill": ("fill", "--fill"), "source": ("source", "--from"),
                 "fps": ("take_fps", "--take-fps"), "scale": ("scale", "--scale"),
                 "timecodes": ("timecodes", "--timecodes"), "max_gap": ("max_gap", "--max-gap")}
-OUTPUTS = (".glb", ".gltf", ".csv", ".json", ".png", ".xml", ".mp4")
+OUTPUTS = (".glb", ".gltf", ".vrm", ".csv", ".json", ".png", ".xml", ".mp4")
 #: most tiles in a .png contact strip
 MAX_SHEET = 400
 
@@ -65,6 +65,9 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
         raise ParameterError(f"output {str(out)!r}: use one of {', '.join(OUTPUTS)}")
     if args.format and ext != ".csv":
         raise ParameterError("--format applies to .csv outputs only")
+    if ext == ".vrm" and not str(getattr(args, "head", "") or "").lower().endswith(".vrm"):
+        raise ParameterError(f"output {str(out)!r}: .vrm is for a VRM avatar given as --head "
+                             "(avatar.vrm); write .glb (or .gltf)")
     if ext == ".csv":
         from mimika.io.livelink import livelink_rate
         from mimika.io.tracks import write_track
@@ -96,7 +99,7 @@ def _write_outputs(args, track, *, timeline=None, settings=None) -> None:
 
     _, rig = load_head(args.head, resolution=getattr(args, "resolution", 1))
     track = _supported(track, rig)
-    if ext in (".glb", ".gltf"):
+    if ext in (".glb", ".gltf", ".vrm"):
         from mimika.face.heads.gltf_export import avatar_export
 
         kept = avatar_export(rig, track)
@@ -259,7 +262,8 @@ def cmd_project(args: argparse.Namespace) -> int:
 
 def _common(p, *, head: bool = True) -> None:
     p.add_argument("-o", "--output", required=True,
-                   help="output: .glb/.gltf (animated head), .csv (--format), .png (frames), "
+                   help="output: .glb/.gltf (animated head; an avatar file --head is kept as "
+                        "it was), .vrm (a VRM avatar), .csv (--format), .png (frames), "
                         ".json (project), .xml (script), .mp4 (spoken video; render only)")
     p.add_argument("--format", choices=CSV_FORMATS,
                    help="CSV layout: au (time,AU01,…; default), openface, arkit (Live Link Face)")

@@ -151,10 +151,10 @@ def build_avatar_gltf(ex: AvatarExport, track: AUTrack | None) -> tuple[dict, by
 
 def write_avatar_gltf(path: str | os.PathLike, ex: AvatarExport, track: AUTrack | None
                       ) -> Path:
-    """Write ``ex`` (and ``track``'s animation) to ``path`` — ``.glb`` or ``.gltf`` (its
-    buffer a base64 data URI) — atomically. Returns the path."""
+    """Write ``ex`` (and ``track``'s animation) to ``path`` — ``.glb`` (``.vrm``: a VRM is a
+    GLB) or ``.gltf`` (its buffer a base64 data URI) — atomically. Returns the path."""
     p = Path(path)
-    if p.suffix.lower() not in (".glb", ".gltf"):
-        raise ParameterError(f"glTF output {str(p)!r} must end in .glb or .gltf")
+    if p.suffix.lower() not in (".glb", ".gltf", ".vrm"):
+        raise ParameterError(f"glTF output {str(p)!r} must end in .glb, .gltf or .vrm")
     doc, binary = build_avatar_gltf(ex, track)
     return save_gltf(p, doc, binary)

@@ -278,6 +278,7 @@ def avatar_export(rig: Any, track: AUTrack | None) -> AvatarExport | None:
     generated = getattr(rig, "generated", {})
     ex.targets, slots = _generated_targets(src, generated, doc)
     own = sorted(n for n, b in src.links.items() if b)
+
     def listed(filled: bool) -> list[str]:
         return sorted({f"{doc['meshes'][t.mesh].get('name', t.mesh)}/{t.name}"
                        for t in ex.targets if (t.replaces is not None) == filled})
