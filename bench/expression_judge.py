@@ -3,7 +3,10 @@
 Renders the seven expressions (neutral and the six basic emotions of the library) per head ×
 view × intensity with ``mimika pose``'s path, and shows each image to an emotion recogniser
 trained on photographs of people (face-api's expression CNN, with its SSD face detector and
-68-point landmark net, run in Node: ``bench/judge``, installed by ``scripts/setup-judge.sh``).
+68-point landmark net, run in Node: ``bench/judge``, installed by ``scripts/setup-judge.sh``),
+and, as a cross-check from another model family, to Arriaga's mini-Xception trained on FER2013
+(``@vladmandic/human``'s emotion model behind its BlazeFace detector: ``bench/judge/human.cjs``)
+— a result tuned to one recogniser that the other does not share is not a face that reads.
 Prints, per head × view × intensity, the top label and the intended class's probability of
 each expression and the recognition rate; then landmark measures (inter-ocular units, from
 the detected landmarks) of single AUs against the ICT head's, which is a light-stage scan of
@@ -46,20 +49,17 @@ MEASURES = {
 }
 
 
-def judge(files: list[Path]) -> list[dict]:
-    """The judge's verdict on each PNG (see ``bench/judge/judge.cjs``)."""
+#: the recognisers: name → script in bench/judge (face-api's also gives the landmarks)
+JUDGES = {"face-api": "judge.cjs", "fer2013": "human.cjs"}
+
+
+def judge(files: list[Path], which: str = "face-api") -> list[dict]:
+    """A recogniser's verdict on each PNG (see ``bench/judge/*.cjs``)."""
     if not (JUDGE / "node_modules").is_dir():
         sys.exit("expression_judge: the judge is not installed; run: bash scripts/setup-judge.sh")
-    out = subprocess.run(["node", str(JUDGE / "judge.cjs"), *map(str, files)],
+    out = subprocess.run(["node", str(JUDGE / JUDGES[which]), *map(str, files)],
                          capture_output=True, text=True, check=True).stdout
     return [json.loads(line) for line in out.splitlines() if line.strip()]
-
-
-def render(rig, aus: dict, view: str, size: tuple[int, int], path: Path) -> Path:
-    from mimika.pose import render_pose
-    from mimika.render import save_png
-
-    return save_png(render_pose(aus, head=rig, view=view, size=size), path)
 
 
 def _iod(lm: np.ndarray) -> float:
@@ -80,54 +80,76 @@ def measure(kind: str, rest: np.ndarray, moved: np.ndarray) -> float:
 
 
 def run_head(name: str, views, intensities, size, out: Path) -> dict:
+    """Render ``name``'s expressions and single-AU measures; each recogniser's verdicts
+    (``{judge: {"expressions": [...]}}``) and face-api's landmark measures."""
     from mimika.face.heads import load_head
     from mimika.knowledge.expressions import expression_aus
+    from mimika.render import Renderer, save_png
 
     _, rig = load_head(name)
     jobs = []
-    for view in views:
-        for k in intensities:
-            for expr in CLASSES:
-                aus = expression_aus(expr, k) if expr != "neutral" else {}
-                jobs.append((view, k, expr, render(rig, aus, view, size,
-                                                   out / f"{name}_{view}_{expr}_{k:g}.png")))
-        for m, (aus, _) in MEASURES.items():
-            jobs.append((view, None, m, render(rig, aus, view, size,
-                                               out / f"{name}_{view}_{m.split()[0]}.png")))
-    verdicts = judge([j[3] for j in jobs])
-    res: dict = {"expressions": [], "measures": {}}
-    rest = {}
-    for (view, k, what, _), v in zip(jobs, verdicts, strict=True):
-        if k is not None:
-            ex = v.get("expressions", {})
-            top = max(ex, key=ex.get) if ex else "no face"
-            res["expressions"].append({"view": view, "intensity": k, "expression": what,
-                                       "top": top, "p": ex.get(CLASSES[what], 0.0)})
-            if what == "neutral" and "landmarks" in v:
-                rest[view] = np.asarray(v["landmarks"])
-        elif "landmarks" in v and view in rest:
-            kind = MEASURES[what][1]
-            res["measures"][view, what] = measure(kind, rest[view], np.asarray(v["landmarks"]))
+    with Renderer(rig.head, size=size, samples=4) as r:
+        for view in views:
+            todo = [(k, e, expression_aus(e, k) if e != "neutral" else {})
+                    for k in intensities for e in CLASSES]
+            todo += [(None, m, aus) for m, (aus, _) in MEASURES.items()]
+            for k, what, aus in todo:
+                vals = rig.check(aus)
+                stem = f"{name}_{view}_{what}_{k:g}" if k else f"{name}_{view}_{what.split()[0]}"
+                path = save_png(r.render(rig.deform(vals), view=view, aus=vals),
+                                out / f"{stem}.png")
+                jobs.append((view, k, what, path))
+    res: dict = {"measures": {}}
+    for which in JUDGES:
+        verdicts = judge([j[3] for j in jobs], which)
+        rows, rest = [], {}
+        for (view, k, what, _), v in zip(jobs, verdicts, strict=True):
+            if k is not None:
+                ex = v.get("expressions", {})
+                top = max(ex, key=ex.get) if ex else "no face"
+                rows.append({"view": view, "intensity": k, "expression": what, "top": top,
+                             "p": ex.get(CLASSES[what], 0.0)})
+                if what == "neutral" and "landmarks" in v:
+                    rest[view] = np.asarray(v["landmarks"])
+            elif "landmarks" in v and view in rest:
+                res["measures"][view, what] = measure(MEASURES[what][1], rest[view],
+                                                      np.asarray(v["landmarks"]))
+        res[which] = {"expressions": rows}
     return res
 
 
-def print_head(name: str, res: dict, ref: dict | None) -> list[int]:
-    rows: dict = {}
-    for e in res["expressions"]:
-        rows.setdefault((e["view"], e["intensity"]), []).append(e)
-    counts = []
-    for (view, k), es in rows.items():
-        ok = sum(CLASSES[e["expression"]] == e["top"] for e in es)
-        counts.append(ok)
-        cells = "  ".join(
-            f"{e['expression'][:5]}:{e['top'][:5]}"
-            f"{'✓' if CLASSES[e['expression']] == e['top'] else '✗'}{e['p']:.2f}" for e in es)
-        print(f"{name:8s} {view:13s} {k:4.1f}  {ok}/{len(es)}  {cells}")
+def print_head(name: str, res: dict, ref: dict | None) -> None:
+    for which in JUDGES:
+        rows: dict = {}
+        for e in res[which]["expressions"]:
+            rows.setdefault((e["view"], e["intensity"]), []).append(e)
+        for (view, k), es in rows.items():
+            ok = sum(CLASSES[e["expression"]] == e["top"] for e in es)
+            cells = "  ".join(
+                f"{e['expression'][:5]}:{e['top'][:5]}"
+                f"{'✓' if CLASSES[e['expression']] == e['top'] else '✗'}{e['p']:.2f}" for e in es)
+            print(f"{name:8s} {which:8s} {view:13s} {k:4.1f}  {ok}/{len(es)}  {cells}")
     for (view, m), val in res["measures"].items():
         r = ref["measures"].get((view, m)) if ref else None
         ratio = f"  ICT {r:.3f} → ratio {val / r:.2f}" if r else ""
         print(f"{name:8s} {view:13s} {m:18s} {val:.3f} IOD{ratio}")
-    return counts
+
+
+def summary(name: str, res: dict) -> str:
+    """Per recogniser: recognised of the intensity-1.0 renders, per view, and happiness at
+    every intensity."""
+    parts = []
+    for which in JUDGES:
+        es = res[which]["expressions"]
+        per_view = []
+        for view in dict.fromkeys(e["view"] for e in es):
+            full = [e for e in es if e["view"] == view and e["intensity"] == 1.0]
+            per_view.append(f"{sum(CLASSES[e['expression']] == e['top'] for e in full)}"
+                            f"/{len(full)}")
+        happy = [e for e in es if e["expression"] == "happiness"]
+        parts.append(f"{which}: {' '.join(per_view)} at 1.0, happiness "
+                     f"{sum(e['top'] == 'happy' for e in happy)}/{len(happy)}")
+    return f"{name:8s} " + "; ".join(parts)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -148,29 +170,22 @@ def main(argv: list[str] | None = None) -> int:
     else:
         out = a.out
         out.mkdir(parents=True, exist_ok=True)
-    ref = None
-    if os.environ.get("MIMIKA_ICT_DIR"):
-        ref = run_head("ict", views, ks, size, out)
-        print_head("ict", ref, None)
-    total, t0 = {}, time.perf_counter()
+    t0 = time.perf_counter()
     everything = {}
+    if os.environ.get("MIMIKA_ICT_DIR"):
+        everything["ict"] = run_head("ict", views, ks, size, out)
+        print_head("ict", everything["ict"], None)
     for h in heads:
-        res = run_head(h, views, ks, size, out)
-        everything[h] = res
-        total[h] = print_head(h, res, ref)
-    print(f"\n{time.perf_counter() - t0:.0f} s")
+        everything[h] = run_head(h, views, ks, size, out)
+        print_head(h, everything[h], everything.get("ict"))
+    print(f"\n{time.perf_counter() - t0:.0f} s; recognised per view ({', '.join(views)})")
     for h, res in everything.items():
-        full = [e for e in res["expressions"] if e["intensity"] == 1.0]
-        ok = sum(CLASSES[e["expression"]] == e["top"] for e in full)
-        happy = [e for e in res["expressions"] if e["expression"] == "happiness"]
-        hok = sum(e["top"] == "happy" for e in happy)
-        print(f"{h:8s} recognised at 1.0: {ok}/{len(full)} ({100 * ok / max(len(full), 1):.0f} %), "
-              f"happiness at every intensity {hok}/{len(happy)}")
+        print(summary(h, res))
     if a.out is not None:
-        doc = {h: {"expressions": r["expressions"],
+        doc = {h: {**{w: r[w] for w in JUDGES},
                    "measures": [{"view": v, "measure": m, "value": x}
                                 for (v, m), x in r["measures"].items()]}
-               for h, r in {**({"ict": ref} if ref else {}), **everything}.items()}
+               for h, r in everything.items()}
         (out / "results.json").write_text(json.dumps(doc, indent=1))
     if tmp is not None:
         tmp.cleanup()

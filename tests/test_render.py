@@ -104,3 +104,38 @@ def test_missing_egl_is_a_render_error_with_the_fix(monkeypatch, builtin_rig):
     monkeypatch.setattr(context, "_create_context", boom)
     with pytest.raises(RenderError, match="apt-get install -y libegl1 libgl1-mesa-dri"):
         Renderer(builtin_rig.head, size=(32, 32)).render()
+
+
+def _sheet(z: float, n: int = 2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A flat square sheet at depth ``z`` (vertices, faces, uvs) facing the camera."""
+    xs = np.linspace(-6, 6, n)
+    x, y = np.meshgrid(xs, xs)
+    v = np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], 1)
+    i = np.arange(n * n).reshape(n, n)
+    a, b, c, d = i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, 1:].ravel(), i[1:, :-1].ravel()
+    faces = np.concatenate([np.stack([a, c, b], 1), np.stack([a, d, c], 1)])
+    return v, faces, (v[:, :2] + 6) / 12
+
+
+@pytest.mark.parametrize("material", ["eyebrow", "eyelash"])
+def test_fine_hairs_on_the_skin_let_it_show_through(material):
+    """Brow and lash textures are blended with their own alpha (hairs lying on the skin): a
+    texel 60 % covered by dark hairs shows 40 % of the skin under it, not an opaque band
+    (blended hair parts draw an opaque core wherever alpha reaches 0.5)."""
+    from mimika.face.head import Head, MeshObject, Part, Texture
+
+    v, f, _ = _sheet(10.0, 9)
+    skin = MeshObject("skin", "body", v, (Part("sclera", f),), oriented=True)
+    v2, f2, uv2 = _sheet(10.2)
+    shade = {}
+    for cover in (0, 153, 255):
+        tex = np.zeros((8, 8, 4), np.uint8)
+        tex[..., 3] = cover
+        hairs = MeshObject("hairs", "body", v2, (Part(material, f2, Texture(tex), "blend"),),
+                           uvs=uv2, oriented=True)
+        head = Head("sheet", (skin, hairs), landmarks=np.arange(68),
+                    anchors={"eye_L": [3.0, 0.0, 10.0], "eye_R": [-3.0, 0.0, 10.0]})
+        with Renderer(head, size=(64, 64), samples=0) as r:
+            shade[cover] = r.render().astype(float)[32, 32].mean()
+    assert shade[255] < 0.2 * shade[0]  # fully covered: the hairs' dark colour
+    assert 0.3 < shade[153] / shade[0] < 0.6  # 60 % covered: 40 % skin

@@ -67,6 +67,9 @@ class Material:
     scatter: tuple[float, float, float] = (1.0, 1.0, 1.0)
     alpha: float = 1.0
     cull: bool = False  #: skip back faces (closed, outward-facing surfaces only)
+    #: a blended part drawn with its texture's alpha throughout (fine hairs lying on the
+    #: skin: brows, lashes), not as an opaque core with a soft fringe (hair)
+    soft: bool = False
     model: str = "standard"  #: shading model: standard, or hair (Kajiya-Kay strands)
 
 
@@ -85,6 +88,7 @@ def load_materials() -> dict[str, Material]:
             shininess=float(m.get("shininess", 20.0)),
             wrap=float(m.get("wrap", 0.0)),
             cull=bool(m.get("cull", False)),
+            soft=bool(m.get("soft", False)),
             scatter=srgb_to_linear(m.get("scatter", "#ffffff")),
             alpha=float(m.get("alpha", 1.0)),
             model=str(m.get("model", "standard")),
@@ -158,8 +162,9 @@ def vertex_normals(
 
 #: alpha modes as the mesh shader's u_alpha_mode: opaque (texture alpha = gloss), a cut-out
 #: part (its depth pre-pass cut at alpha 0.5, then shaded where the depth test equals it),
-#: blend fringe (only the soft edge below 0.5, blended, no depth write)
-_OPAQUE, _CUT, _FRINGE = 0, 1, 3
+#: soft (blended with its alpha throughout, no depth write), blend fringe (only the soft edge
+#: below 0.5, blended, no depth write)
+_OPAQUE, _CUT, _SOFT, _FRINGE = 0, 1, 2, 3
 
 
 class _GpuObject:
@@ -537,11 +542,14 @@ class Renderer:
             for p in gl["progs"].values():
                 p["u_view"].write(self._view[0])
                 p["u_proj"].write(self._view[1])
-            glass, cut, fringe = [], [], []
+            glass, cut, soft, fringe = [], [], [], []
             for o in self._opaque_order():
                 for mat, first, count, tex, mode in o.parts:
                     if mat.alpha < 1.0:
                         glass.append((o, mat, first, count, tex))
+                        continue
+                    if mode == "blend" and mat.soft:
+                        soft.append((o, mat, first, count, tex))
                         continue
                     if mode != "opaque":
                         cut.append((o, mat, first, count, tex))
@@ -570,12 +578,15 @@ class Renderer:
                 for o, mat, first, count, tex in cut:
                     self._draw_part(gl, ctx, o, mat, first, count, tex, _CUT)
                 ctx.depth_func = "<"
-            if glass or fringe:
+            if glass or soft or fringe:
                 ctx.enable(ctx.BLEND)
                 ctx.depth_mask = False
                 ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
                 for o, mat, first, count, tex in glass:
                     self._draw_part(gl, ctx, o, mat, first, count, tex, _OPAQUE)
+                # fine hairs on the skin (brows, lashes), under the hair's soft edges
+                for o, mat, first, count, tex in soft:
+                    self._draw_part(gl, ctx, o, mat, first, count, tex, _SOFT)
                 # soft edges of blended parts over everything drawn so far (premultiplied)
                 for o, mat, first, count, tex in fringe:
                     self._draw_part(gl, ctx, o, mat, first, count, tex, _FRINGE)

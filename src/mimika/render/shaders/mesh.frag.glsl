@@ -24,7 +24,7 @@ in vec4 v_shadow;
 
 uniform vec3 u_base;        // linear base colour
 uniform sampler2D u_tex;
-uniform int u_alpha_mode;   // 0 opaque, 1 cut at 0.5, 3 soft fringe below 0.5 (blended)
+uniform int u_alpha_mode;   // 0 opaque, 1 cut at 0.5, 2 blended, 3 soft fringe below 0.5
 uniform float u_specular;   // specular strength
 uniform float u_shininess;  // Blinn-Phong exponent
 uniform float u_wrap;       // wrap diffuse (0 = Lambert)
@@ -151,8 +151,8 @@ void main() {
     vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha * ao;
     // inside the mouth what light there is has bounced off its red walls
     c = (c + ambient) * facing * v_occ.y * mix(vec3(1.0), vec3(1.0, 0.86, 0.8), 1.0 - v_occ.y);
-    if (u_alpha_mode == 3) {  // premultiplied soft edge; the core (a >= 0.5) adds nothing
-        a = (a < 0.5 && a >= 0.02) ? a : 0.0;
+    if (u_alpha_mode >= 2) {  // premultiplied; a fringe's core (a >= 0.5) adds nothing
+        a = (a >= 0.02 && (u_alpha_mode == 2 || a < 0.5)) ? a : 0.0;
         f_color = vec4(to_srgb(tonemap(c)) * a, a);
         return;
     }

@@ -99,6 +99,8 @@ def _cards(pos: np.ndarray, tris: np.ndarray, lab: np.ndarray, kind: str):
                 s = 1.0 - s  # s grows away from the nose
             up = np.linalg.norm(p - eyes[side], axis=1)  # roots on the lid, tips farther out
         t, height = _across(p, ltris, s, up)
+        if kind == "lash" and p[t > 0.9, 2].mean() < p[t < 0.1, 2].mean():
+            t = 1.0 - t  # lashes grow forward from the lid margin
         order = np.argsort(s)
         length = float(np.linalg.norm(np.diff(p[order], axis=0), axis=1).sum())
         length = min(length, 1.2 * float(np.linalg.norm(p[order[-1]] - p[order[0]])) + 0.3)
@@ -233,7 +235,30 @@ def lash_canvas(length_cm: float, height_cm: float, st: dict, lower: bool, seed:
         pts = (1 - k) ** 2 * root[i] + 2 * (1 - k) * k * ctrl + k ** 2 * tips[i]
         pts[:, 1] = h - pts[:, 1]
         strokes.append((pts, width[i] * (1.0 - 0.8 * k[:, 0]), tone[i]))
-    return _draw(strokes, (w, h))
+    cov, ton = _draw(strokes, (w, h))
+    # the lash line: roots in two or three rows along the lid margin, seen end-on, read as
+    # one dark line under the hairs
+    t = 1.0 - (np.arange(h) + 0.5) / h
+    band = st["line"] * (0.5 if lower else 1.0) * np.clip((0.2 - t) / 0.12, 0.0, 1.0)
+    band = band[:, None] * np.sin(np.pi * (np.arange(w) + 0.5) / w)[None, :] ** 3
+    total = 1.0 - (1.0 - cov) * (1.0 - band.astype(np.float32))
+    return total, np.where(total > 1e-3, (ton * cov + band * (1 - cov)) / np.maximum(total, 1e-3),
+                           1.0).astype(np.float32)
+
+
+def _per_texel(uv: np.ndarray, tris: np.ndarray, s: np.ndarray, t: np.ndarray
+               ) -> tuple[float, float]:
+    """How far ``s`` and ``t`` (per vertex) change from one texel to the next on a card
+    (medians over its triangles of the gradients' lengths, texture of SIZE texels)."""
+    px = uv[tris] * SIZE  # (F, 3, 2)
+    e = px[:, 1:] - px[:, :1]  # (F, 2, 2)
+    ok = np.abs(np.linalg.det(e)) > 1e-9
+    grads = []
+    for f in (s, t):
+        df = f[tris[ok, 1:]] - f[tris[ok, :1]]  # (F, 2)
+        g = np.linalg.solve(e[ok], df[..., None])[..., 0]
+        grads.append(float(np.median(np.linalg.norm(g, axis=1))) if ok.any() else 0.0)
+    return grads[0], grads[1]
 
 
 def _lookup(canvas: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -263,6 +288,16 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
         seed = seed_of(kind, asset, character.name, i)
         a, tn = (brow_canvas(length, height, st, seed) if kind == "brow"
                  else lash_canvas(length, height, st, lower, seed))
+        # a texel shows the mean of the hairs it covers (no aliasing on thin UV islands)
+        local = np.full(len(pos), -1)
+        local[ids] = np.arange(len(ids))
+        card = local[tris[np.isin(tris[:, 0], ids)]]
+        ds, dt = _per_texel(uv[ids], card, s, t)
+        sigma = (0.45 * dt * a.shape[0], 0.45 * ds * a.shape[1])
+        if max(sigma) > 0.5:
+            at_ = ndimage.gaussian_filter(a * tn, sigma)
+            a = ndimage.gaussian_filter(a, sigma)
+            tn = np.where(a > 1e-3, at_ / np.maximum(a, 1e-3), 1.0).astype(np.float32)
         vst = np.zeros((len(pos), 2))
         vst[ids] = np.column_stack([s, t])
         ts = at.at(vst)[sel]
