@@ -8,7 +8,7 @@ corpus' own word times (median error, share within 50 ms). A child over ``--cap-
 and reported as such, so an unbounded version can be measured without taking the machine down.
 
     .venv/bin/python bench/bench_align_memory.py [--durations 60,240,480,900,1800]
-        [--engines auto,dtw] [--cap-mb 8000] [--src DIR]
+        [--engines auto,dtw] [--cap-mb 8000] [--src DIR] [--rate 48000]
 
 ``--src`` runs another source tree (e.g. an older version unpacked with ``git archive``).
 """
@@ -29,16 +29,17 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from mimika.speech.audio import read_wav, write_wav
+from mimika.speech.audio import read_wav, resample, write_wav
 from mimika.speech.utterance import Utterance
 
 _GRID = Path("shared", "speech", "grid-s1-dev")
 DEFAULT_DIR = next((p / _GRID for p in ROOT.parents if (p / _GRID).is_dir()), _GRID)
 
 
-def build(d: Path, seconds: float, out: Path) -> list[tuple[float, float]]:
-    """Write ``out.wav`` and ``out.txt`` (GRID utterances end to end, as many as fit in
-    ``seconds``); return the true (start, end) of every word."""
+def build(d: Path, seconds: float, out: Path, rate: int | None = None
+          ) -> list[tuple[float, float]]:
+    """Write ``out.wav`` (at ``rate`` Hz, default GRID's own) and ``out.txt`` (GRID utterances
+    end to end, as many as fit in ``seconds``); return the true (start, end) of every word."""
     ids = sorted(p.stem for p in (d / "wav").glob("*.wav"))
     parts, sents, truth, t, k, sr = [], [], [], 0.0, 0, 16000
     while True:
@@ -57,7 +58,10 @@ def build(d: Path, seconds: float, out: Path) -> list[tuple[float, float]]:
         parts.append(a)
         sents.append(" ".join(words) + ".")
         t += len(a) / sr
-    write_wav(out.with_suffix(".wav"), np.concatenate(parts), sr=sr)
+    audio = np.concatenate(parts)
+    if rate and rate != sr:
+        audio, sr = resample(audio, orig_sr=sr, target_sr=rate), rate
+    write_wav(out.with_suffix(".wav"), audio, sr=sr)
     out.with_suffix(".txt").write_text(" ".join(sents) + "\n")
     return truth
 
@@ -121,20 +125,24 @@ def main() -> None:
     ap.add_argument("--cap-mb", type=float, default=8000, help="kill a run above this RSS")
     ap.add_argument("--timeout", type=float, default=1800, help="kill a run after this (s)")
     ap.add_argument("--src", default=str(ROOT / "src"), help="source tree to run")
+    ap.add_argument("--rate", type=int, help="write the recordings at this rate (Hz)")
     args = ap.parse_args()
     d = Path(args.dir)
     if not (d / "wav").is_dir():
         raise SystemExit(f"no GRID data in {d} (set MIMIKA_SPEECH_DIR)")
     env = dict(os.environ, PYTHONPATH=args.src, OPENBLAS_NUM_THREADS="1",
                OMP_NUM_THREADS="1")
-    print(f"source {args.src}; GRID utterances from {d}")
+    print(f"source {args.src}; GRID utterances from {d}" +
+          (f", written at {args.rate} Hz" if args.rate else ""))
     print(f"{'seconds':>8} {'engine':<6} {'peak MB':>8} {'MB/min':>7} {'wall s':>7} "
           f"{'median ms':>9} {'≤50ms':>6}  status")
     with tempfile.TemporaryDirectory() as tmp:
         for secs in (float(s) for s in args.durations.split(",")):
             base = Path(tmp, f"rec{secs:g}")
-            truth = build(d, secs, base)
-            dur = len(read_wav(base.with_suffix(".wav"))[0]) / 16000
+            truth = build(d, secs, base, args.rate)
+            a, sr = read_wav(base.with_suffix(".wav"))
+            dur = len(a) / sr
+            del a
             for eng in args.engines.split(","):
                 out = base.with_name(f"{base.name}-{eng}.json")
                 cmd = [sys.executable, "-m", "mimika", "align", str(base.with_suffix(".wav")),
