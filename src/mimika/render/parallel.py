@@ -5,7 +5,8 @@ and moderngl holds the GIL during every GL call, so threads cannot fill that gap
 can. :func:`render_track` deals fixed-size chunks of AU frames to a pool of spawned workers,
 each holding a copy of the rig, which deform and draw them; the images come back in order.
 Each chunk starts afresh (:meth:`~mimika.render.Renderer.invalidate`), so the images are the
-same whatever the number of workers.
+same whatever the number of workers. A :class:`RenderPool` started early sets its workers up
+(occlusion, textures, shaders) while the caller is still busy, e.g. with speech.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import numpy as np
 
 log = logging.getLogger(__name__)
 
-_worker: dict[str, Any] = {}  # the worker's rig, channels and Renderer
+_worker: dict[str, Any] = {}  # the worker's rig and Renderer
 
 
 def default_workers(n_frames: int, chunk: int) -> int:
@@ -59,19 +60,26 @@ def _watch_parent(ppid: int) -> None:
     os._exit(1)
 
 
-def _init(rig: Any, channels: Sequence[str], size: tuple[int, int], samples: int, skin: Any,
-          lighting: Any, lp_threads: int, hidden: Sequence[str] = (), ppid: int = 0) -> None:
+def _init(rig: Any, size: tuple[int, int], samples: int, skin: Any, lighting: Any,
+          lp_threads: int, hidden: Sequence[str] = (), ppid: int = 0,
+          camera: Any = None) -> None:
     if ppid:
         threading.Thread(target=_watch_parent, args=(ppid,), name="mimika-watch-parent",
                          daemon=True).start()
     os.environ.setdefault("LP_NUM_THREADS", str(lp_threads))
-    _worker.update(rig=rig, channels=channels,
-                   renderer=_open(rig, size, samples, skin, lighting, hidden))
+    renderer = _open(rig, size, samples, skin, lighting, hidden)
+    if camera is not None:  # set up now (occlusion, textures, shaders): one frame at rest
+        renderer.render(camera=camera, aus={})
+    _worker.update(rig=rig, renderer=renderer)
 
 
-def _render_chunk(values: np.ndarray, camera: Any) -> np.ndarray:
+def _ready() -> None:
+    """A task that does nothing: submitting one per worker starts the processes."""
+
+
+def _render_chunk(values: np.ndarray, channels: Sequence[str], camera: Any) -> np.ndarray:
     w = _worker
-    return np.stack(list(_draw(w["renderer"], w["rig"], values, w["channels"], camera)))
+    return np.stack(list(_draw(w["renderer"], w["rig"], values, channels, camera)))
 
 
 def _stop(pool: Any) -> None:
@@ -118,51 +126,97 @@ def sweep_semaphores(shm: str = "/dev/shm") -> int:
     return removed
 
 
+class RenderPool:
+    """``workers`` spawned rendering processes for one track on ``rig``'s head, seen by
+    ``camera``, started at once: each sets up its renderer (occlusion, textures, shaders —
+    about a second) while the caller is still busy, e.g. with speech. ``size``, ``samples``,
+    ``skin``, ``lighting`` and ``hidden`` are those of :class:`~mimika.render.Renderer`.
+
+    Hand it to :func:`render_track`, which ends the processes when the track is done;
+    ``close()`` (or leaving a ``with`` block) ends them otherwise.
+    """
+
+    def __init__(self, rig: Any, *, camera: Any, size: tuple[int, int], samples: int = 0,
+                 skin: Any = False, lighting: Any = None, workers: int = 2,
+                 hidden: Sequence[str] = ()) -> None:
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+
+        self.workers = max(1, int(workers))
+        # llvmpipe threads per worker: the cores shared out; 0 rasterises in the calling
+        # thread (cheaper than handing every tile to a single helper thread)
+        lp = (os.cpu_count() or 1) // self.workers
+        lp = 0 if lp <= 1 else lp
+        sweep_semaphores()
+        self.executor = ProcessPoolExecutor(
+            self.workers, mp_context=mp.get_context("spawn"), initializer=_init,
+            initargs=(rig, size, samples, skin, lighting, lp, tuple(hidden), os.getpid(),
+                      camera))
+        for _ in range(self.workers):  # spawned on demand: one task each starts them all
+            self.executor.submit(_ready)
+
+    def stop(self) -> None:
+        """End the processes now, dropping what they are drawing."""
+        _stop(self.executor)
+
+    def close(self) -> None:
+        """End the processes once they are idle."""
+        self.executor.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> RenderPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if exc[0] is None:
+            self.close()
+        else:
+            self.stop()
+
+
 def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camera: Any,
                  size: tuple[int, int], samples: int = 0, skin: Any = False,
                  lighting: Any = None, chunk: int = 50, workers: int = 1,
-                 hidden: Sequence[str] = ()) -> Iterator[np.ndarray]:
+                 hidden: Sequence[str] = (), pool: RenderPool | None = None
+                 ) -> Iterator[np.ndarray]:
     """Yield the image (H, W, 3) uint8 of every row of ``values`` (T × channels AU
     intensities) on ``rig``'s head, in order.
 
     ``workers`` > 1 renders in that many spawned processes (at most ``workers + 1`` chunks of
     ``chunk`` frames in flight); 1 renders here. ``size``, ``samples``, ``skin`` and
-    ``lighting`` and ``hidden`` are those of :class:`~mimika.render.Renderer`.
+    ``lighting`` and ``hidden`` are those of :class:`~mimika.render.Renderer`. A ``pool``
+    started earlier for the same head, camera and settings renders instead (its workers
+    count); it is closed when the track is done.
     """
     starts = range(0, len(values), chunk)
-    if workers <= 1:
+    if workers <= 1 and pool is None:
         with _open(rig, size, samples, skin, lighting, hidden) as r:
             for i0 in starts:
                 yield from _draw(r, rig, values[i0:i0 + chunk], channels, camera)
         return
 
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
     from mimika.errors import RenderError
 
-    # llvmpipe threads per worker: the cores shared out; 0 rasterises in the calling thread
-    # (cheaper than handing every tile to a single helper thread)
-    lp = (os.cpu_count() or 1) // workers
-    lp = 0 if lp <= 1 else lp
-    sweep_semaphores()
-    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_init,
-                             initargs=(rig, list(channels), size, samples, skin, lighting,
-                                       lp, tuple(hidden), os.getpid())) as pool:
-        pending: deque = deque()
-        try:
-            for i0 in starts:
-                pending.append(pool.submit(_render_chunk, values[i0:i0 + chunk], camera))
-                if len(pending) > workers:
-                    yield from pending.popleft().result()
-            while pending:
+    if pool is None:
+        pool = RenderPool(rig, camera=camera, size=size, samples=samples, skin=skin,
+                          lighting=lighting, workers=workers, hidden=hidden)
+    pending: deque = deque()
+    try:
+        for i0 in starts:
+            pending.append(pool.executor.submit(_render_chunk, values[i0:i0 + chunk],
+                                                list(channels), camera))
+            if len(pending) > pool.workers:
                 yield from pending.popleft().result()
-        except BrokenProcessPool as exc:
-            raise RenderError(
-                f"the rendering processes stopped ({exc}); render with workers=1 (--workers 1) "
-                "to see the error here, and start them from a script only under "
-                "'if __name__ == \"__main__\":'") from None
-        except BaseException:  # interrupted, terminated or abandoned: stop the workers now
-            _stop(pool)
-            raise
+        while pending:
+            yield from pending.popleft().result()
+    except BrokenProcessPool as exc:
+        pool.stop()
+        raise RenderError(
+            f"the rendering processes stopped ({exc}); render with workers=1 (--workers 1) "
+            "to see the error here, and start them from a script only under "
+            "'if __name__ == \"__main__\":'") from None
+    except BaseException:  # interrupted, terminated or abandoned: stop the workers now
+        pool.stop()
+        raise
+    pool.close()
