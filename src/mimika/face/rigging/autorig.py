@@ -1,6 +1,7 @@
 """``mimika rig``: give a face mesh with no facial morphs FACS and ARKit blendshapes.
 
-1. Read the mesh (OBJ, glTF/GLB/VRM); split OBJ meshes into connected pieces.
+1. Read the mesh (OBJ, glTF/GLB/VRM); split its meshes into connected pieces (the copies of
+   a vertex at a UV seam welded: :func:`~mimika.face.rigging.features.weld`).
 2. Find the face and bring it into mimika's frame (:mod:`~mimika.face.rigging.frame`), or take
    the eyes and mouth from a landmarks file.
 3. Sort the pieces: eyeballs (round, behind an eye opening) turn for AU61–64; teeth and tongue
@@ -8,12 +9,15 @@
 4. Place the 68 landmarks and carry the shipped per-shape fields onto the mesh
    (:mod:`~mimika.face.rigging.generate`): the 53 ICT shapes, from which the ARKit-52 set (all
    but ``tongueOut``) and the FACS AUs (``facs/data/ict_aus.json``) are composed.
+5. Keep where each object came from, so the output is the input with morphs added
+   (:func:`~mimika.face.rigging.export.write_rigged`): same place, meshes, vertex order, UVs.
 """
 
 from __future__ import annotations
 
 import json
 import logging
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +30,7 @@ from scipy.spatial import cKDTree
 from mimika.errors import DataError
 from mimika.face.head import Head, MeshObject, Part
 from mimika.face.rigging.assemble import AvatarRig, build_rig, head_anchors
-from mimika.face.rigging.features import find_face, sphere_fit
+from mimika.face.rigging.features import find_face, sphere_fit, weld
 from mimika.face.rigging.frame import Frame, detect_frame, frame_from_points
 from mimika.face.rigging.generate import Shapes, generate_shapes, template
 from mimika.face.rigging.landmarks import landmarks68
@@ -38,7 +42,9 @@ __all__ = ["RiggedMesh", "read_landmarks", "rig_mesh"]
 
 @dataclass
 class RiggedMesh:
-    """The rigged head, its AU rig, the generated shapes (ICT names) and what was found."""
+    """The rigged head, its AU rig, the generated shapes (ICT names) and what was found. The
+    head's ``meta["gltf"]`` is the file :func:`~mimika.face.rigging.export.write_rigged`
+    writes again (the input, or an OBJ's GLB twin)."""
 
     head: Head
     rig: AvatarRig
@@ -48,23 +54,46 @@ class RiggedMesh:
 
 
 @dataclass
+class _Source:
+    """One mesh of the input as the output keeps it: vertices (file units), triangles per
+    material, UVs (mimika's convention: v up), category, and glTF materials per part."""
+
+    name: str
+    vertices: np.ndarray
+    parts: list[tuple[str, np.ndarray]]
+    uvs: np.ndarray | None = None
+    category: str = "face"
+    materials: list | None = None
+
+
+@dataclass
 class _Piece:
+    """A connected piece of a source mesh (seams welded): its vertices' indices there."""
+
+    src: int
+    index: np.ndarray
     name: str
     vertices: np.ndarray  # file units
     parts: list[tuple[str, np.ndarray]]  # material name, faces (local indices)
     uvs: np.ndarray | None = None
     category: str = "face"
     materials: list | None = None  # glTF: the SceneMaterial of each part (or None)
+    weld: np.ndarray | None = None  # per vertex, a label shared by the copies of a position
 
 
-def _split(v: np.ndarray, f: np.ndarray, groups: np.ndarray, names: tuple[str, ...],
-           uvs: np.ndarray | None, stem: str) -> list[_Piece]:
-    """Connected pieces of one mesh, largest first (unused vertices dropped)."""
-    n = len(v)
-    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]]])
+def _split(si: int, s: _Source) -> list[_Piece]:
+    """The connected pieces of source mesh ``s`` (UV-seam copies welded; vertices no
+    triangle uses left out)."""
+    n = len(s.vertices)
+    rep = weld(s.vertices)
+    tris = [f for _, f in s.parts]
+    groups = np.concatenate([np.full(len(f), k) for k, f in enumerate(tris)])
+    f = np.concatenate(tris).astype(np.int64)
+    fw = rep[f]
+    e = np.concatenate([fw[:, [0, 1]], fw[:, [1, 2]]])
     g = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
     _, lab = connected_components(g, directed=False)
-    face_lab = lab[f[:, 0]]
+    face_lab = lab[fw[:, 0]]
     pieces = []
     for k in np.unique(face_lab):
         fk = f[face_lab == k]
@@ -72,40 +101,80 @@ def _split(v: np.ndarray, f: np.ndarray, groups: np.ndarray, names: tuple[str, .
         remap = np.full(n, -1, np.int64)
         remap[used] = np.arange(len(used))
         gk = groups[face_lab == k]
-        parts = [(names[gi], remap[fk[gk == gi]]) for gi in np.unique(gk)]
-        pieces.append(_Piece(stem, v[used], parts, None if uvs is None else uvs[used]))
-    pieces.sort(key=lambda p: -len(p.vertices))
+        parts = [(s.parts[gi][0], remap[fk[gk == gi]]) for gi in np.unique(gk)]
+        mats = None if s.materials is None else [s.materials[gi] for gi in np.unique(gk)]
+        labels = np.unique(rep[used], return_inverse=True)[1]
+        pieces.append(_Piece(si, used, s.name, s.vertices[used], parts,
+                             None if s.uvs is None else s.uvs[used], s.category, mats,
+                             labels if len(np.unique(labels)) < len(used) else None))
     return pieces
 
 
-def _read(path: Path) -> tuple[list[_Piece], str, int | None]:
-    """Pieces, the file's unit and its VRM version."""
+def _obj_source(path: Path) -> _Source:
+    """An OBJ as one mesh the way glTF holds it: the file's vertices in their order, then a
+    copy for each further texture coordinate a vertex takes at a UV seam."""
+    from mimika.io.obj import read_obj
+
+    m = read_obj(path)
+    if len(m.faces) == 0:
+        raise DataError(f"{path}: the mesh has no faces")
+    v, f = m.vertices.astype(float), m.faces.astype(np.int64)
+    uv = None
+    if m.uvs is not None and m.face_uvs is not None:
+        n = len(v)
+        corners = np.c_[f.reshape(-1), m.face_uvs.reshape(-1)]
+        pairs, inv = np.unique(corners, axis=0, return_inverse=True)
+        inv = inv.reshape(-1)
+        first = np.full(len(pairs), len(corners))
+        np.minimum.at(first, inv, np.arange(len(corners)))
+        order = np.lexsort((first, pairs[:, 0]))  # per vertex, its first corner's pair first
+        head = np.r_[True, pairs[order[1:], 0] != pairs[order[:-1], 0]]
+        primary = np.zeros(len(pairs), bool)
+        primary[order[head]] = True
+        new = pairs[:, 0].copy()
+        extra = np.flatnonzero(~primary)
+        new[extra] = n + np.arange(len(extra))
+        v = np.concatenate([v, v[pairs[extra, 0]]])
+        uv = np.zeros((len(v), 2))
+        uv[new] = m.uvs[pairs[:, 1]]
+        f = new[inv].reshape(-1, 3)
+    parts = [(m.groups[g], f[m.face_groups == g]) for g in np.unique(m.face_groups)]
+    return _Source(path.stem, v, parts, uv)
+
+
+def _read(path: Path) -> tuple[list[_Source], object | None, str, int | None]:
+    """The input's meshes, its glTF scene (None for OBJ), unit and VRM version."""
     ext = path.suffix.lower()
     if ext == ".obj":
-        from mimika.io.obj import read_obj
-
-        m = read_obj(path)
-        if len(m.faces) == 0:
-            raise DataError(f"{path}: the mesh has no faces")
-        return (_split(m.vertices.astype(float), m.faces.astype(np.int64),
-                       m.face_groups, m.groups, m.vertex_uvs(), path.stem), "cm", None)
+        return [_obj_source(path)], None, "cm", None
     if ext in (".glb", ".gltf", ".vrm"):
         from mimika.face.heads.gltf import mesh_category
         from mimika.face.heads.gltf_scene import read_gltf
+        from mimika.face.heads.roles import motion, name_role
 
         sc = read_gltf(path)
-        pieces = []
+        sources = []
         for m in sc.meshes:
             mats = [sc.materials[k] if 0 <= k < len(sc.materials) else None
                     for k, _ in m.primitives]
             parts = [(mat.name if mat else "default", f)
                      for mat, (_, f) in zip(mats, m.primitives, strict=True)]
             uv = None if m.uvs is None else np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]]
-            pieces.append(_Piece(m.name, m.vertices, parts, uv, mesh_category(m, sc, set()),
-                                 mats))
-        pieces.sort(key=lambda p: (p.category != "face", -len(p.vertices)))
-        return pieces, "m", sc.vrm_version
+            role = name_role(m.name, m.mesh_name)
+            cat = "body" if role is not None and motion(role.role) == "none" else \
+                mesh_category(m, sc, set())
+            sources.append(_Source(m.name, m.vertices, parts, uv, cat, mats))
+        return sources, sc, "m", sc.vrm_version
     raise DataError(f"{path}: mimika rig reads .obj, .glb, .gltf and .vrm meshes")
+
+
+def _twin(path: Path, src: _Source, scale_m: float, folder: Path) -> Path:
+    """The OBJ's GLB twin (positions × ``scale_m`` to metres) in ``folder``."""
+    from mimika.face.rigging.export import BareMesh, write_bare_glb
+
+    uv = None if src.uvs is None else np.c_[src.uvs[:, 0], 1.0 - src.uvs[:, 1]]
+    return write_bare_glb(folder / f"{path.stem}.glb",
+                          [BareMesh(src.name, src.vertices * scale_m, src.parts, uv)])
 
 
 def read_landmarks(path: str | Path) -> dict[str, np.ndarray]:
@@ -158,6 +227,26 @@ def _part(material: str, faces: np.ndarray, category: str, mat=None) -> Part:
     return Part(key, faces) if mat is None else Part(key, faces, *part_texture(mat, key))
 
 
+def _keep_source(head: Head, path: Path, sources: list[_Source], scene: object | None,
+                 frame: Frame, where: dict[str, tuple[int, np.ndarray]]) -> None:
+    """``head.meta["gltf"]``: the file the output is written over — the input, or an OBJ's
+    GLB twin (in a folder that lives as long as the head, ``meta["twin"]``) — and where
+    each object's vertices are in it."""
+    from mimika.face.heads.gltf_export import AvatarSource
+    from mimika.face.heads.gltf_scene import read_gltf
+
+    if scene is None:
+        folder = tempfile.TemporaryDirectory(prefix="mimika-rig-")
+        head.meta["twin"] = folder
+        path = _twin(path, sources[0], frame.scale / 100.0, Path(folder.name))
+        scene = read_gltf(path)
+        frame = Frame(100.0, frame.rotation, frame.translation, frame.features, "m",
+                      frame.notes)
+    bones: dict[str, int | None] = dict.fromkeys(("head", "neck", "eye_L", "eye_R"))
+    head.meta["gltf"] = AvatarSource(path, scene, scene.node_world, frame, dict(where), {},
+                                     bones)
+
+
 def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: str = "ict"
              ) -> RiggedMesh:
     """Rig the mesh at ``path`` (see the module doc); ``style``: whose shapes the fields were
@@ -166,7 +255,9 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: st
     p = Path(path)
     if not p.is_file():
         raise DataError(f"{p}: no such file")
-    pieces, unit, vrm = _read(p)
+    sources, scene, unit, vrm = _read(p)
+    pieces = [pc for si, s in enumerate(sources) for pc in _split(si, s)]
+    pieces.sort(key=lambda pc: (pc.category != "face", -len(pc.vertices)))
     face = pieces[0]
     faces = np.concatenate([f for _, f in face.parts])
     given = None
@@ -199,7 +290,7 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: st
         if pc.category == "eyes":
             pivot = sphere_fit(v)[0]
             eyes.setdefault("eye_L" if pivot[0] > 0 else "eye_R", pivot)
-        objs.append(MeshObject(name, pc.category, v, parts, pivot, pc.uvs))
+        objs.append(MeshObject(name, pc.category, v, parts, pivot, pc.uvs, pc.weld))
     skin_v = objs[0].vertices.astype(float)
     if given is not None:
         _, lm_idx = cKDTree(skin_v).query(frame.apply(given))
@@ -211,6 +302,8 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: st
     head = Head(p.stem, tuple(objs), lm_idx, head_anchors(skin_v, lm_pts, eyes),
                 landmark_object="skin", description=f"rigged by mimika from {p}",
                 meta={"source": str(p), "frame": frame.describe(), "frame_obj": frame})
+    _keep_source(head, p, sources, scene, frame, {o.name: (pc.src, pc.index)
+                                                  for o, pc in zip(objs, pieces, strict=True)})
     t2 = time.perf_counter()
     shapes = generate_shapes(head, style=style)
     t3 = time.perf_counter()

@@ -7,6 +7,11 @@ the surface in front of them, not deeper than a tenth of the head. Openings are 
 two eyes (a mirror pair, side by side) above a mouth (centred below them, about as far below
 as they are apart); the best triple wins. Coordinates here are the candidate frame's: y up,
 the face looking toward +z, +x the subject's left.
+
+Vertices at one position are taken as one (:func:`weld`): a glTF mesh is cut at its UV seams,
+and a seam is no hole — else the seams inside a mouth bag make a second, deeper "mouth".
+A mouth or eye must be seen from the front: a hole or cavity whose rim lies behind the face
+(inside the mouth bag or an eye socket) scores lower.
 """
 
 from __future__ import annotations
@@ -18,10 +23,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FaceFeatures", "find_face", "openings", "sphere_fit"]
+__all__ = ["FaceFeatures", "find_face", "openings", "sphere_fit", "weld", "welded"]
+
+#: vertices closer than this fraction of the mesh's size are one (UV-seam copies)
+WELD_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -48,6 +57,7 @@ class _Opening:
     rim: np.ndarray  # vertex indices
     points: np.ndarray  # rim positions
     centre: np.ndarray
+    visible: float = 1.0  # the fraction of the rim seen from the front
 
     def extent(self, axis: np.ndarray) -> float:
         return float(np.ptp(self.points @ axis))
@@ -58,6 +68,33 @@ def sphere_fit(p: np.ndarray) -> tuple[np.ndarray, float]:
     from mimika.face.heads.ict import _fit_sphere
 
     return _fit_sphere(p)
+
+
+def weld(v: np.ndarray, tol: float = WELD_TOL) -> np.ndarray:
+    """Per vertex, the first vertex at its position (within ``tol`` of the mesh's size): the
+    copies a UV seam (or a normal seam) cuts a glTF mesh into point to one vertex."""
+    v = np.asarray(v, float)
+    n = len(v)
+    if n < 2:
+        return np.arange(n)
+    r = tol * max(float(np.ptp(v, axis=0).max()), 1e-12)
+    pairs = cKDTree(v).query_pairs(r, output_type="ndarray")
+    if not len(pairs):
+        return np.arange(n)
+    g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, lab = connected_components(g, directed=False)
+    first = np.full(lab.max() + 1, n, np.int64)
+    np.minimum.at(first, lab, np.arange(n))
+    return first[lab]
+
+
+def welded(v: np.ndarray, f: np.ndarray, rep: np.ndarray | None = None
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(welded vertices, triangles into them, each vertex's welded index) of (v, f); ``rep``:
+    :func:`weld` of ``v`` when known."""
+    rep = weld(v) if rep is None else rep
+    keep, inverse = np.unique(rep, return_inverse=True)
+    return np.asarray(v)[keep], inverse[np.asarray(f)], inverse
 
 
 def _edges(f: np.ndarray) -> np.ndarray:
@@ -82,7 +119,10 @@ def _components(n: int, e: np.ndarray, keep: np.ndarray) -> list[np.ndarray]:
 
 
 def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
-    """Holes (boundary loops) and front cavities of the mesh (v in the candidate frame)."""
+    """Holes (boundary loops) and front cavities of the mesh (v in the candidate frame; seams
+    welded, rims given as indices of ``v``)."""
+    rep = weld(v)
+    f = rep[np.asarray(f)]
     n = len(v)
     e = _edges(f)
     es = np.sort(e, axis=1)
@@ -91,9 +131,7 @@ def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
     out: list[_Opening] = []
     on_b = np.zeros(n, bool)
     on_b[boundary.ravel()] = True
-    for comp in _components(n, boundary, on_b):
-        if len(comp) >= 6:
-            out.append(_make(v, comp))
+    loops = [c for c in _components(n, boundary, on_b) if len(c) >= 6]
     # cavities: vertices hidden behind the surface in front of them — a z-buffer of points
     # sampled over every triangle (spacing h, ~300 000 samples over the whole surface)
     tri = v[f]
@@ -119,6 +157,7 @@ def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
     depth = zbuf[key[:n]] - v[:, 2]
     span = float(np.ptp(v[:, 2])) or 1.0
     front = depth <= 3.0 * h
+    out += [_make(v, c, float(front[c].mean())) for c in loops]
     hidden = ~front & (depth < 0.12 * span)
     if hidden.any():
         # rim = front-most (visible) vertices next to hidden ones
@@ -134,9 +173,9 @@ def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
     return out
 
 
-def _make(v: np.ndarray, rim: np.ndarray) -> _Opening:
+def _make(v: np.ndarray, rim: np.ndarray, visible: float = 1.0) -> _Opening:
     p = v[rim]
-    return _Opening(rim, p, 0.5 * (p.max(0) + p.min(0)))
+    return _Opening(rim, p, 0.5 * (p.max(0) + p.min(0)), visible)
 
 
 def _score(el: _Opening, er: _Opening, m: _Opening) -> float:
@@ -161,6 +200,7 @@ def _score(el: _Opening, er: _Opening, m: _Opening) -> float:
         abs(np.log(drop / d)) / 2,                         # about as far below as apart
         abs(np.log(max(wm, 1e-9) / (0.85 * d))) / 2,       # about as wide as the eye gap
         abs(np.log(max(wl, 1e-9) / (0.45 * d))) / 2,       # eyes ~ half the gap wide
+        (1.0 - m.visible) + 0.5 * (2.0 - el.visible - er.visible),  # seen from the front
     ]
     return 1.0 - float(sum(terms))
 

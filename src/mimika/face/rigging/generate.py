@@ -142,8 +142,10 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None, style: str =
     for sname, sp in fs.splits.items():
         for o in head.objects:
             v = o.vertices.astype(float)
-            if o.category == "face":
-                upper[sname, o.name] = sp.surface_weight(v, o.faces)
+            if o.category == "face":  # along the mesh, its UV-seam copies as one vertex
+                _, first, inv = np.unique(np.arange(len(v)) if o.weld is None else o.weld,
+                                          return_index=True, return_inverse=True)
+                upper[sname, o.name] = sp.surface_weight(v[first], inv[o.faces])[inv]
             else:  # rigid objects (teeth rows, tongue) go whole, by where most of them lies
                 upper[sname, o.name] = np.full(len(v), float(sp.upper_weight(v).mean() > 0.5))
     want = list(available(style) if names is None else names)

@@ -1,0 +1,193 @@
+"""``mimika rig`` on several heads: does any AU tear or flip the mesh?
+
+Each head is written as a bare file a user would bring (:mod:`mimika.face.rigging.samples`),
+rigged with each field style, and every AU and side is measured at intensities 0 → 1 on
+the face objects (UV-seam copies welded):
+
+* **stretch** — the longest edge at τ = 1 over its rest length (an edge's length is convex
+  in τ, so τ = 1 is its worst); an edge over 3× is counted as torn;
+* **flips** — triangles whose normal turns past 90° from rest at any τ in (0, 1] (solved
+  exactly: n(τ)·n(0) is a quadratic in τ);
+* **seam gap** — the largest distance (mm) between two copies of one vertex (a UV seam
+  that opens).
+
+Heads: the built-in head (OBJ; GLB with eyes and teeth, standing 1.6 m up and turned 25°;
+decimated), a MakeHuman character's head (GLB with eyes and teeth, cut at UV seams;
+remeshed), the ICT head as a game head has it (face, mouth bag and eye sockets in one mesh
+cut at UV seams, with eyes and teeth; decimated — needs ``MIMIKA_ICT_DIR``).
+
+    MIMIKA_ICT_DIR=… nice python bench/bench_rig_quality.py [--styles ict,makehuman] [--all]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _common import ict_available, single_core
+
+single_core()
+
+#: an edge stretched beyond this is torn
+TORN = 3.0
+
+
+def triangle_checks(v: np.ndarray, f: np.ndarray, d: np.ndarray) -> tuple[float, int, int]:
+    """(worst edge stretch, edges over TORN, triangles flipped at some τ in (0, 1]) of mesh
+    (v, f) moved by ``d``."""
+    e = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), 1), axis=0)
+    l0 = np.linalg.norm(v[e[:, 1]] - v[e[:, 0]], axis=1)
+    l1 = np.linalg.norm(v[e[:, 1]] + d[e[:, 1]] - v[e[:, 0]] - d[e[:, 0]], axis=1)
+    ok = l0 > 1e-4
+    ratio = l1[ok] / l0[ok]
+    a, b = v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]
+    da, db = d[f[:, 1]] - d[f[:, 0]], d[f[:, 2]] - d[f[:, 0]]
+    n0 = np.cross(a, b)
+    c0 = (n0 * n0).sum(1)
+    c1 = ((np.cross(a, db) + np.cross(da, b)) * n0).sum(1)
+    c2 = (np.cross(da, db) * n0).sum(1)
+    t = np.clip(np.where(c2 > 0, -c1 / np.where(c2 > 0, 2 * c2, 1), 1.0), 0.0, 1.0)
+    low = np.minimum(c0 + c1 + c2, c0 + c1 * t + c2 * t * t)
+    good = c0 > 1e-12
+    return (float(ratio.max(initial=1.0)), int((ratio > TORN).sum()),
+            int((low[good] < 0).sum()))
+
+
+def measure(rig) -> list[dict]:
+    """Per AU and side: stretch, torn edges, flips and seam gap over the face objects."""
+    from mimika.face.rigging.export import au_shapes
+    from mimika.face.rigging.features import welded
+
+    head = rig.head
+    meshes = {}
+    for o in head.objects:
+        if o.category != "face":
+            continue
+        labels = o.weld if o.weld is not None else np.arange(o.n_vertices)
+        _, first, inv = np.unique(labels, return_index=True, return_inverse=True)
+        _, f, _ = welded(o.vertices.astype(float), o.faces.astype(np.int64), first[inv])
+        meshes[o.name] = (o.vertices[first].astype(float), f, first, first[inv])
+    rows = []
+    for code, per in au_shapes(rig).items():
+        row = {"au": code, "stretch": 1.0, "torn": 0, "flips": 0, "gap_mm": 0.0}
+        for name, d in per.items():
+            if name not in meshes:
+                continue
+            v, f, first, rep = meshes[name]
+            s, torn, flips = triangle_checks(v, f, d[first].astype(float))
+            row["stretch"] = max(row["stretch"], s)
+            row["torn"] += torn
+            row["flips"] += flips
+            row["gap_mm"] = max(row["gap_mm"], 10 * float(np.abs(d - d[rep]).max()))
+        rows.append(row)
+    return rows
+
+
+def heads(tmp: Path) -> list[tuple[str, Path]]:
+    """(label, file) of the sample heads."""
+    from mimika.face.heads import load_head
+    from mimika.face.rigging.export import write_obj
+    from mimika.face.rigging.samples import decimated, remeshed, write_samples
+
+    out = []
+    b, _ = load_head("builtin")
+    files = write_samples(b, tmp, "builtin")
+    out.append(("builtin (OBJ)", files["obj"]))
+    files = write_samples(b, tmp, "builtin_scene", ("skin", "eye_L", "eye_R", "teeth_upper",
+                                                    "teeth_lower"),
+                          offset_m=(0.3, 1.6, -0.2), yaw_deg=25.0)
+    out.append(("builtin + eyes, teeth (GLB, 1.6 m up, turned 25°)", files["glb"]))
+    v, f = decimated(b["skin"].vertices * 0.01, b["skin"].faces, 0.35)
+    out.append(("builtin, decimated to 35 % (OBJ)", write_obj(tmp / "builtin_dec.obj", v, f)))
+    a, _ = load_head("amara")
+    files = write_samples(a, tmp, "amara", ("skin", "eye_L", "eye_R", "teeth"))
+    out.append(("amara + eyes, teeth (GLB cut at UV seams)", files["glb"]))
+    files = write_samples(a, tmp, "amara_skin")
+    sv, sf = _read_obj(files["obj"])
+    v, f = remeshed(sv, sf)
+    out.append(("amara, remeshed (OBJ)", write_obj(tmp / "amara_remeshed.obj", v, f)))
+    if ict_available():
+        out.append(("ICT: face + mouth bag + sockets in one mesh, eyes, teeth (GLB, seams)",
+                    ict_game_head(tmp)))
+        v, f = ict_skin()
+        v, f = decimated(v, f, 0.4)
+        out.append(("ICT skin, decimated to 40 % (OBJ)", write_obj(tmp / "ict_dec.obj", v, f)))
+    else:
+        print("ICT heads skipped: set MIMIKA_ICT_DIR", file=sys.stderr)
+    return out
+
+
+def _read_obj(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    from mimika.io.obj import read_obj
+
+    m = read_obj(path)
+    return m.vertices.astype(float), m.faces.astype(np.int64)
+
+
+def ict_skin() -> tuple[np.ndarray, np.ndarray]:
+    """The ICT skin (cm): vertices and triangles."""
+    from mimika.face.heads.ict import RANGES, load_ict_data
+
+    d = load_ict_data()
+    lo, hi = RANGES["skin"]
+    f = d.faces[np.all((d.faces >= lo) & (d.faces < hi), axis=1)] - lo
+    return d.vertices[lo:hi].astype(float), f.astype(np.int64)
+
+
+def ict_game_head(tmp: Path) -> Path:
+    """The ICT head the way a game head is made: face, mouth bag and eye sockets one mesh
+    cut at its UV seams, eyeballs and teeth their own meshes (GLB, metres)."""
+    from mimika.face.heads.ict import find_ict_dir
+    from mimika.face.rigging.export import BareMesh, write_bare_glb
+    from mimika.io.obj import read_obj
+
+    m = read_obj(find_ict_dir() / "generic_neutral_mesh.obj")
+    meshes = []
+    for name, lo, hi in (("head", 0, 14062), ("teeth", 17039, 21451), ("eyeL", 21451, 23021),
+                         ("eyeR", 23021, 24591)):
+        keep = np.all((m.faces >= lo) & (m.faces < hi), axis=1)
+        f, fuv = m.faces[keep].astype(np.int64), m.face_uvs[keep].astype(np.int64)
+        pairs, inv = np.unique(np.c_[f.reshape(-1), fuv.reshape(-1)], axis=0, return_inverse=True)
+        uv = m.uvs[pairs[:, 1]]
+        meshes.append(BareMesh(name, m.vertices[pairs[:, 0]] * 0.01,
+                               [(name, inv.reshape(-1, 3))], np.c_[uv[:, 0], 1 - uv[:, 1]]))
+    return write_bare_glb(tmp / "ict_game.glb", meshes)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--styles", default="ict,makehuman")
+    ap.add_argument("--all", action="store_true", help="print every AU, not only the faulty")
+    args = ap.parse_args()
+    from mimika.face.rigging.autorig import rig_mesh
+
+    total = {"torn": 0, "flips": 0}
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, path in heads(Path(tmp)):
+            for style in args.styles.split(","):
+                t0 = time.perf_counter()
+                r = rig_mesh(path, style=style)
+                rows = measure(r.rig)
+                worst = max(rows, key=lambda x: x["stretch"])
+                bad = [x for x in rows if x["torn"] or x["flips"] or x["gap_mm"] > 0.01]
+                total["torn"] += sum(x["torn"] for x in rows)
+                total["flips"] += sum(x["flips"] for x in rows)
+                print(f"{label} [{style}] ({time.perf_counter() - t0:.0f} s): {len(rows)} AU "
+                      f"shapes; worst stretch {worst['stretch']:.2f}× ({worst['au']}); torn "
+                      f"edges {sum(x['torn'] for x in rows)}, flipped triangles "
+                      f"{sum(x['flips'] for x in rows)} in {len(bad)} AUs; seam gap "
+                      f"{max(x['gap_mm'] for x in rows):.3f} mm", flush=True)
+                for x in rows if args.all else bad:
+                    print(f"    {x['au']:<7} stretch {x['stretch']:5.2f}×  torn {x['torn']:4d}  "
+                          f"flips {x['flips']:4d}  seam gap {x['gap_mm']:.3f} mm")
+    print(f"all heads: torn edges {total['torn']}, flipped triangles {total['flips']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
