@@ -22,13 +22,19 @@ POSES = {"rest": {}, "25": {"AU25": 1.0}, "6+12+25": {"AU06": 1.0, "AU12": 1.0, 
          "26": {"AU26": 1.0}}
 
 
-def incisors(head, rig) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Teeth objects and, over their stacked vertices, masks of the upper and lower front
-    incisors (the lower row is what the jaw carries)."""
-    names = [o.name for o in head.objects if o.category == "teeth" and "tongue" not in o.name]
+def incisors(head, rig) -> tuple[list[tuple[str, np.ndarray]], np.ndarray, np.ndarray]:
+    """The teeth (vertices of ``teeth`` parts, not gums or tongue) as (object, vertex ids)
+    and, over their stacked vertices, masks of the upper and lower front incisors (the lower
+    row is what the jaw carries)."""
+    sel = []
+    for o in head.objects:
+        ids = np.unique(np.concatenate([p.faces.ravel() for p in o.parts
+                                        if p.material == "teeth"] or [np.zeros(0, int)]))
+        if o.category == "teeth" and len(ids):
+            sel.append((o.name, ids))
     rest, opened = rig.deform({}), rig.deform({"AU27": 1.0})
-    v = np.concatenate([rest[n] for n in names])
-    moved = np.linalg.norm(np.concatenate([opened[n] for n in names]) - v, axis=1)
+    v = np.concatenate([rest[n][i] for n, i in sel])
+    moved = np.linalg.norm(np.concatenate([opened[n][i] for n, i in sel]) - v, axis=1)
     lower = moved > 0.3 * moved.max()
     skin = rest[head.objects[0].name]
     lm = head.landmarks
@@ -37,7 +43,7 @@ def incisors(head, rig) -> tuple[list[str], np.ndarray, np.ndarray]:
     rows = []
     for row in (mid & ~lower, mid & lower):
         rows.append(row & (v[:, 2] > v[row, 2].max() - 0.3))
-    return names, rows[0], rows[1]
+    return sel, rows[0], rows[1]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -53,12 +59,12 @@ def main(argv: list[str] | None = None) -> int:
           f"{'teeth gap':>10s} {'lips gap':>9s} {'show':>5s}")
     for name in heads:
         head, rig = load_head(name)
-        names, up, lo = incisors(head, rig)
+        sel, up, lo = incisors(head, rig)
         lm = head.landmarks
         for pose, aus in POSES.items():
             pos = rig.deform(aus)
             skin = pos[head.objects[0].name]
-            t = np.concatenate([pos[n] for n in names])
+            t = np.concatenate([pos[n][i] for n, i in sel])
             ue, le = t[up, 1].min(), t[lo, 1].max()
             ul, ll = skin[lm[62], 1], skin[lm[66], 1]
             show = (ul - ue) / (ul - ll) if ul - ll > 0.3 else float("nan")

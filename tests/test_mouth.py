@@ -14,11 +14,15 @@ SMILE = {"AU06": 1.0, "AU12": 1.0, "AU25": 1.0}
 
 
 def _incisors(head, rig):
-    """Stacked teeth vertices' masks: upper and lower front incisors at the midline."""
-    teeth = head["teeth"].vertices
+    """Masks over the teeth object's vertices: the upper and lower front incisors at the
+    midline (tooth parts only: not the gums)."""
+    o = head["teeth"]
+    tooth = np.zeros(o.n_vertices, bool)
+    tooth[np.concatenate([p.faces.ravel() for p in o.parts if p.material == "teeth"])] = True
+    teeth = o.vertices
     lower = np.linalg.norm(rig.deform({"AU27": 1.0})["teeth"] - teeth, axis=1) > 0.1
     skin, lm = head["skin"].vertices, head.landmarks
-    mid = (np.abs(teeth[:, 0] - skin[lm[[48, 54]], 0].mean()) < 0.4) & (
+    mid = tooth & (np.abs(teeth[:, 0] - skin[lm[[48, 54]], 0].mean()) < 0.4) & (
         np.abs(teeth[:, 1] - skin[lm[[62, 66]], 1].mean()) < 1.5)
     return [row & (teeth[:, 2] > teeth[row, 2].max() - 0.3)
             for row in (mid & ~lower, mid & lower)]

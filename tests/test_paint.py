@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from mimika.face.makehuman.paint import cache, color, eyes, strokes
 from mimika.face.makehuman.paint.noise import fbm3, value3
@@ -287,6 +288,23 @@ def test_every_lash_row_is_drawn_as_separate_hairs(asset):
     for k in np.unique(card):
         assert (a[card == k] > 0.9).mean() < 0.15, (asset, k)  # hairs with gaps, no bands
         assert (a[card == k] > 0.3).mean() > 0.01, (asset, k)  # … and hairs there are
+
+
+@needs_anny
+def test_teeth_are_separate_teeth_over_pink_gums(daniel):
+    """The dentition's gums are their own (pink) part and the enamel darkens toward each
+    tooth's outline, so a row reads as separate teeth, not one white band."""
+    from mimika.face.makehuman.paint import parts_of
+
+    c, pieces = daniel
+    parts = {p.material: p for p in parts_of(pieces["teeth"], c)}
+    assert set(parts) == {"teeth", "gums"} and parts["gums"].texture is None
+    assert 0.3 < len(parts["gums"].faces) / len(pieces["teeth"].parts["teeth"]) < 0.7
+    img = parts["teeth"].texture.image
+    at = rasterize(pieces["teeth"].uvs, parts["teeth"].faces, img.shape[1::-1])
+    lum = img.reshape(-1, 4)[at.texels, :3].astype(float).mean(1)
+    edge = ndimage.binary_erosion(at.covered, iterations=2).ravel()[at.texels]
+    assert lum[edge].mean() > 1.06 * lum[~edge].mean()  # outlines darker than the middles
 
 
 @needs_anny

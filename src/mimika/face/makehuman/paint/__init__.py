@@ -78,10 +78,22 @@ def _part_texture(mat: str, piece: Piece, ch: Character) -> tuple[Texture | None
     return None, "opaque"
 
 
+def _teeth_parts(piece: Piece, ch: Character) -> tuple[Part, ...]:
+    from mimika.face.makehuman.paint.teeth import paint_teeth
+    from mimika.face.makehuman.teeth import gum_faces
+
+    tris = piece.parts["teeth"]
+    gums = gum_faces(piece)
+    tex = _texture("teeth", piece, {"name": ch.name}, lambda: paint_teeth(piece, ch.name))
+    return Part("teeth", tris[~gums], tex), Part("gums", tris[gums])
+
+
 def parts_of(piece: Piece, character: Character) -> tuple[Part, ...]:
     """The parts of ``piece`` with their materials and textures."""
     if piece.name == "skin":
         return _skin_parts(piece, character)
+    if piece.name == "teeth" and piece.uvs is not None and set(piece.parts) == {"teeth"}:
+        return _teeth_parts(piece, character)
     out = []
     for mat, faces in piece.parts.items():
         tex, mode = _part_texture(mat, piece, character) if piece.uvs is not None else \
