@@ -133,6 +133,8 @@ def test_wav_chunks_nested_deep_padded_or_piped_read_like_plain_ones(tmp_path):
      "a format FFmpeg does not decode"),
     ("NaN", _riff(_fmt(tag=3, bits=32), _ck(b"data", np.full(1600, np.nan, "<f4").tobytes())),
      "NaN"),
+    ("1e300", _riff(_fmt(tag=3, bits=64), _ck(b"data", np.full(1600, 1e300, "<f8").tobytes())),
+     "infinite"),
     ("no channels", _riff(_fmt(ch=0), _ck(b"data", bytes(3200))), "no channels"),
     ("short fmt", _riff(_ck(b"fmt ", bytes(6)), _ck(b"data", bytes(3200))), "not 16"),
 ])
