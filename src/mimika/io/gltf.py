@@ -578,11 +578,17 @@ def save_gltf(path: str | os.PathLike, doc: dict, binary: bytes) -> Path:
         doc["buffers"][0]["uri"] = ("data:application/octet-stream;base64," +
                                     base64.b64encode(binary).decode("ascii"))
         return atomic_write(p, json.dumps(doc, separators=(",", ":")))
+    out = glb_bytes(doc, binary)
+    log.info("wrote %s (%d bytes)", p, len(out))
+    return atomic_write(p, out)
+
+
+def glb_bytes(doc: dict, binary: bytes) -> bytes:
+    """A built glTF document and its buffer as the bytes of one GLB file."""
+    doc["buffers"][0]["byteLength"] = len(binary)
     js = json.dumps(doc, separators=(",", ":")).encode("utf-8")
     js += b" " * (-len(js) % 4)
     total = 12 + 8 + len(js) + 8 + len(binary)
-    out = (struct.pack("<III", 0x46546C67, 2, total)
-           + struct.pack("<II", len(js), 0x4E4F534A) + js
-           + struct.pack("<II", len(binary), 0x004E4942) + binary)
-    log.info("wrote %s (%d bytes)", p, len(out))
-    return atomic_write(p, out)
+    return b"".join([struct.pack("<III", 0x46546C67, 2, total),
+                     struct.pack("<II", len(js), 0x4E4F534A), js,
+                     struct.pack("<II", len(binary), 0x004E4942), binary])
