@@ -7,7 +7,7 @@ next to pauses onto the recording's energy (:mod:`mimika.speech.vad`), and time 
 written (:mod:`mimika.speech.words`). Real-speech figures: ``bench/bench_align_real.py``.
 A recording over a minute goes to pocketsphinx piece by piece, cut at pauses a DTW alignment
 of the whole finds (:mod:`mimika.speech.pieces`), so memory stays linear up to
-``max_recording`` (30 min: 5.1 GB → under 1 GB; ``bench/bench_align_memory.py``).
+``max_recording`` (30 min at 16 kHz: 5.1 GB → 0.85 GB; ``bench/bench_align_memory.py``).
 
 DTW method: the recording is cut to its speech (sustained energy, ± 0.1 s), so silence, clicks
 and breaths around it cannot drag the edge words; the transcript is synthesised with espeak-ng
