@@ -4,7 +4,9 @@ For every seed-002 face AU (and mimika's extra ones) at intensity 1, the peak di
 its extent (the area-weighted 95th percentile over the face front), in inter-ocular units,
 on the four preset characters and the built-in head, each divided by the ICT Face Model's
 (light-stage scans of a real actor). Calibrated: both ratios in 0.7–1.4 (FACS exceptions, where
-the extent is not compared, are marked "–")::
+the extent is not compared, are marked "–"). Then how the motion is shaped: per AU and head
+the landmark shape error against ICT (0: the 68 landmarks move as ICT's do; 1: as far off as
+not moving at all)::
 
     MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/au_calibration.py [--markdown]
 """
@@ -13,6 +15,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+
+import numpy as np
 
 HEADS = ("amara", "daniel", "mei", "tomas", "builtin")
 
@@ -27,8 +31,10 @@ def main(argv: list[str] | None = None) -> int:
     a = p.parse_args(argv)
     heads = a.heads.split(",")
     codes = (*SEED_AUS, *EXTRA_AUS)
-    ref = au_motion(load_head("ict")[1], codes)
-    rows = {h: ratios(au_motion(load_head(h)[1], codes), ref) for h in heads}
+    ict = load_head("ict")[1]
+    ref = au_motion(ict, codes)
+    rigs = {h: load_head(h)[1] for h in heads}
+    rows = {h: ratios(au_motion(rigs[h], codes), ref) for h in heads}
     lo, hi = TOLERANCE
     md = a.markdown
     head = ["AU", "ICT peak / extent (% IOD)", *heads]
@@ -50,8 +56,27 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {c} | {r} | " + " | ".join(cells) + " |" if md else
               f"{c:5s} {r:>12s}  " + "  ".join(f"{x:>11s}" for x in cells))
     n = sum(len(r) for r in rows.values())
-    print(f"\n{n - bad} of {n} head × AU pairs within {lo}–{hi}× ICT (peak / extent)")
+    print(f"\n{n - bad} of {n} head × AU pairs within {lo}–{hi}× ICT (peak / extent)\n")
+    shapes = {h: shape_errors(rigs[h], ict, codes) for h in heads}
+    print(("| AU | " + " | ".join(heads) + " |\n|" + "---|" * (len(heads) + 1)) if md else
+          f"{'AU':5s} shape error: " + "  ".join(f"{h:>7s}" for h in heads))
+    for c in codes:
+        cells = [f"{shapes[h][c]:.2f}" if c in shapes[h] else "n/a" for h in heads]
+        print(f"| {c} | " + " | ".join(cells) + " |" if md else
+              f"{c:5s}              " + "  ".join(f"{x:>7s}" for x in cells))
     return 0
+
+
+def shape_errors(rig, ref_rig, codes) -> dict[str, float]:
+    """Landmark shape error of each AU of ``codes`` the rig models against ``ref_rig``'s."""
+    from mimika.face.calibration import landmark_motion, shape_error
+
+    def lm(r, c):
+        o = r.head.landmark_object
+        return landmark_motion(np.asarray(r.deform({c: 1.0})[o]) - r.head.rest[o], r.head)
+
+    return {c: shape_error(lm(rig, c), lm(ref_rig, c)) for c in codes
+            if c in rig.supported and c in ref_rig.supported}
 
 
 if __name__ == "__main__":

@@ -3,7 +3,10 @@
 For every face AU, peak and extent over the face front (``mimika.face.calibration``) are
 measured on the head and on ICT (a real actor's scans), and the AU's calibration is chosen to
 bring them together — the worst |log ratio| over the heads, a little in favour of leaving the
-head's own motion as it is — then written into the head's data file::
+head's own motion as it is — then written into the head's data file. For the characters, of
+the calibrations whose ratios all lie well inside the tolerance (``SAFE``), the one whose
+landmarks move most like ICT's (:func:`~mimika.face.calibration.shape_error`, mean over the
+presets) is taken::
 
     export MIMIKA_ICT_DIR=../shared/ict-facekit
     .venv/bin/python scripts/calibrate.py characters   # face/data/makehuman_aus.json
@@ -25,7 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from importlib import resources
 from pathlib import Path
 
@@ -33,9 +36,13 @@ import numpy as np
 
 PRESETS = ("amara", "daniel", "mei", "tomas")
 KEEP = ("AU41", "AU42", "AU43", "AU44", "AU45", "AU46")
-#: characters: the lips' own AUs keep the faceunits' shapes (gain only): speech presses and
-#: rounds the lips with them, and the faceunits keep them sealed where ICT's funnel and
-#: pucker part them; parting them (25) the ict-style shapes leave the inner upper lip behind
+#: characters: ratios to ICT within which a calibration is chosen by the shape of its motion
+SAFE = (0.75, 1.33)
+#: characters: the lips' own AUs keep the faceunits' shapes, calibrated by peak and extent
+#: alone: speech presses and rounds the lips with them and the faceunits keep them sealed
+#: where ICT's funnel and pucker part them (a /b/ before /u/ opens), the ict-style shapes
+#: fatten the red of the lips where FACS narrows it (23, 24), and the teeth are seated for
+#: the faceunits' lip parting (25)
 LIPS = ("AU18", "AU22", "AU23", "AU24", "AU25", "AU28")
 #: builtin: the jaw's fields are not widened (they would reach the neck)
 JAW = ("AU26", "AU27", "AU29", "AU30")
@@ -72,57 +79,82 @@ def _reference(codes: list[str]) -> dict[str, tuple[float, float]]:
 
 
 def _choose(code: str, candidates: dict, ref: tuple[float, float],
-            prior: Callable[[tuple], float]) -> tuple:
+            prior: Callable[[tuple], float], shape: Mapping[tuple, float] | None = None
+            ) -> tuple:
     """The candidate key whose (peak, extent) per head ({key: [(p, e) per head]}) is closest
-    to ``ref`` in the worst |log ratio|, plus ``prior(key)``; with that worst and the ratios."""
+    to ``ref`` in the worst |log ratio|, plus ``prior(key)``; with that worst and the ratios.
+    With ``shape`` ({key: landmark shape error}), of the candidates whose ratios all lie
+    within :data:`SAFE` the one with the least shape error (plus the prior) wins."""
     from mimika.face.calibration import EXCEPTIONS
 
     skip = EXCEPTIONS.get(code, ((), ""))[0]
+    lo, hi = np.log(SAFE)
     best = None
     for key, per_head in candidates.items():
         rs = [(p / ref[0], e / ref[1]) for p, e in per_head]
-        worst = max(max(0.0 if "peak" in skip else abs(np.log(a)),
-                        0.0 if "extent" in skip else abs(np.log(b))) for a, b in rs)
+        logs = [np.log(x) for a, b in rs for what, x in (("peak", a), ("extent", b))
+                if what not in skip]
+        worst = max((abs(x) for x in logs), default=0.0)
         score = worst + prior(key)
+        if shape is not None:  # feasible candidates first, by the shape of their motion
+            ok = all(lo <= x <= hi for x in logs)
+            score = (shape[key] + prior(key)) if ok else 10.0 + score
         if best is None or score < best[0]:
             best = (score, key, worst, rs)
     return best[1:]
 
 
-def _report(code: str, key: tuple, worst: float, rs: list) -> None:
+def _report(code: str, key: tuple, worst: float, rs: list, shape: float | None = None) -> None:
     cells = "  ".join(f"{a:.2f}/{b:.2f}" for a, b in rs)
-    print(f"{code:5s} {key[0]:5.2f} {key[1]:5.2f}  {worst:5.3f}  {cells}", flush=True)
+    err = "" if shape is None else f"  shape error {shape:.2f}"
+    print(f"{code:5s} {key[0]:5.2f} {key[1]:5.2f}  {worst:5.3f}  {cells}{err}", flush=True)
 
 
 def characters() -> Path:
-    from mimika.face.calibration import EXTRA_AUS, SEED_AUS, face_front, motion
-    from mimika.face.heads import character
+    from mimika.face.calibration import (
+        EXTRA_AUS,
+        SEED_AUS,
+        face_front,
+        landmark_motion,
+        motion,
+        shape_error,
+    )
+    from mimika.face.heads import character, load_head
 
     path = Path(str(resources.files("mimika.face").joinpath("data/makehuman_aus.json")))
     table = json.loads(path.read_text("utf-8"))
     codes = [c for c in (*SEED_AUS, *EXTRA_AUS)
              if c not in KEEP and "shapes" in table["aus"].get(c, {})]
     ref = _reference(codes)
-    disp: dict[str, list] = {c: [] for c in codes}  # per AU: (front, faceunits, ict) per head
+    ict_head, ict_rig = load_head("ict")
+    ict_rest = ict_head.rest["skin"]
+    ref_lm = {c: landmark_motion(np.asarray(ict_rig.deform({c: 1.0})["skin"]) - ict_rest,
+                                 ict_head) for c in codes}
+    #: per AU and head: (front, faceunits Δ, ict-style Δ, their landmark motions, head)
+    disp: dict[str, list] = {c: [] for c in codes}
     for name in PRESETS:
         rigs = [character.character_rig(name, {c: {"ict": w, "gain": 1.0} for c in codes})
                 for w in (0.0, 1.0)]
-        front = face_front(rigs[0].head)
-        rest = rigs[0].head.rest["skin"].astype(np.float64)
+        head = rigs[0].head
+        front = face_front(head)
+        rest = head.rest["skin"].astype(np.float64)
         for c in codes:
             dm, di = (np.asarray(r.deform({c: 1.0})["skin"], np.float64) - rest for r in rigs)
-            disp[c].append((front, dm, di))
+            disp[c].append((front, dm, di, landmark_motion(dm, head), landmark_motion(di, head)))
     print(f"{'AU':5s} {'ict':>5s} {'gain':>5s}  worst  ratio to ICT (peak/extent): "
           + "  ".join(PRESETS))
+    gains = GAINS[(GAINS >= 0.6) & (GAINS <= 1.6)]
     for c in codes:
-        shares = (0.0,) if c in LIPS else (0.0, 0.25, 0.5, 0.75, 1.0)
-        gains = GAINS[(GAINS >= 0.6) & (GAINS <= 1.6)]
-        cand = {(w, float(g)): [motion(g * ((1 - w) * dm + w * di), front)
-                                for front, dm, di in disp[c]]
-                for w in shares for g in gains}
+        keys = [(w, float(g)) for w in ((0.0,) if c in LIPS else (0.0, 0.25, 0.5, 0.75, 1.0))
+                for g in gains]
+        cand = {(w, g): [motion(g * ((1 - w) * dm + w * di), front)
+                         for front, dm, di, _, _ in disp[c]] for w, g in keys}
+        shape = {(w, g): float(np.mean([shape_error(g * ((1 - w) * lm + w * li), ref_lm[c])
+                                        for _, _, _, lm, li in disp[c]])) for w, g in keys}
         key, worst, rs = _choose(c, cand, ref[c],
-                                 lambda k: 0.02 * k[0] + 0.05 * abs(np.log(k[1])))
-        _report(c, key, worst, rs)
+                                 lambda k: 0.02 * k[0] + 0.05 * abs(np.log(k[1])),
+                                 None if c in LIPS else shape)
+        _report(c, key, worst, rs, shape[key])
         table["aus"][c]["calibration"] = {"ict": key[0], "gain": key[1]}
     return _write(path, table, ("aus", "body"))
 

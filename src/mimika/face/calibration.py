@@ -11,6 +11,10 @@ distance (IOD, eye centre to eye centre) so heads of any size compare:
   exceeds. A brow raise that lifts the whole forehead has a large extent; one that moves only
   the brows a small one, at the same peak.
 
+How the motion is *shaped* — which way the lip corners, lids, brows and nose go — is compared on
+the 68 landmarks: :func:`shape_error` is the length of the difference between a head's and the
+reference's landmark displacements (IOD units, 3-D) over the length of the reference's.
+
 A head is calibrated when, AU by AU, both lie within :data:`TOLERANCE` of the reference's
 (``bench/au_calibration.py`` prints the table; docs/rigs.md#calibration lists it).
 """
@@ -25,7 +29,7 @@ import numpy as np
 from mimika.face.head import Head
 
 __all__ = ["EXCEPTIONS", "EXTRA_AUS", "SEED_AUS", "TOLERANCE", "FaceFront", "au_motion",
-           "face_front", "motion", "ratios"]
+           "face_front", "landmark_motion", "motion", "ratios", "shape_error"]
 
 #: the 22 AUs of seed 002 that move the face (its head and eye turns are rotations)
 SEED_AUS = ("AU01", "AU02", "AU04", "AU05", "AU06", "AU07", "AU09", "AU10", "AU12", "AU15",
@@ -96,6 +100,20 @@ def motion(displacement: np.ndarray, front: FaceFront) -> tuple[float, float]:
     cum = np.cumsum(w[order])
     k = min(int(np.searchsorted(cum, 0.95 * cum[-1])), len(d) - 1)
     return float(d.max()), float(d[order][k])
+
+
+def landmark_motion(displacement: np.ndarray, head: Head) -> np.ndarray:
+    """The landmarks' displacements (68, 3) in IOD units, from per-vertex displacements (N, 3)
+    of the head's landmark object."""
+    eye_l, eye_r = (np.asarray(head.anchors[k], np.float64) for k in ("eye_L", "eye_R"))
+    return np.asarray(displacement, np.float64)[head.landmarks] / np.linalg.norm(eye_l - eye_r)
+
+
+def shape_error(moved: np.ndarray, reference: np.ndarray) -> float:
+    """How differently two heads' landmarks move (:func:`landmark_motion` of each): the
+    difference's length over the reference's (0: the same motion; 1: as far off as no
+    motion at all)."""
+    return float(np.linalg.norm(moved - reference) / max(np.linalg.norm(reference), 1e-12))
 
 
 def au_motion(rig, codes: Iterable[str] = SEED_AUS) -> dict[str, tuple[float, float]]:
