@@ -132,3 +132,31 @@ def test_a_long_recording_aligns_piece_by_piece(monkeypatch, long_speech, engine
     assert all(a.end == b.start for a, b in pairwise(est.phonemes))
     if engine == "auto" and est.meta["engine"] == "sphinx":
         assert est.meta["pieces"] >= u.duration / 12.0
+
+
+def test_a_piece_pocketsphinx_cannot_align_keeps_its_dtw_phones(monkeypatch, long_speech):
+    from mimika.errors import ParameterError
+    from mimika.speech import align, alignment
+
+    u = long_speech
+    monkeypatch.setattr(pieces, "PIECE", 12.0)
+    monkeypatch.setattr(pieces, "MIN_PIECE", 4.0)
+    real, calls = alignment._sphinx_phones, []
+
+    def flaky(a, sr, toks, lang, act):
+        calls.append(len(toks))
+        if len(calls) == 2:
+            raise ParameterError("pocketsphinx cannot align the transcript to the audio")
+        return real(a, sr, toks, lang, act)
+
+    monkeypatch.setattr(alignment, "_sphinx_phones", flaky)
+    est = align(u.audio, sr=u.sr, transcript=u.text, lang="en", engine="auto")
+    assert est.meta["engine"] == "sphinx" and est.meta["dtw_pieces"] == 1
+    assert [w.text for w in est.words] == [w.text for w in u.words]
+    err = np.abs(np.array([(w.start, w.end) for w in est.words]) -
+                 np.array([(w.start, w.end) for w in u.words]))
+    assert np.median(err) < 0.04
+    assert all(a.end == b.start for a, b in pairwise(est.phonemes))
+    with pytest.raises(ParameterError):  # the sphinx engine asked for by name: no fallback
+        calls.clear()
+        align(u.audio, sr=u.sr, transcript=u.text, lang="en", engine="sphinx")
