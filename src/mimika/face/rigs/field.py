@@ -276,15 +276,17 @@ class Split:
         t = np.clip(0.5 + 0.5 * s / np.maximum(width, 1e-9), 0.0, 1.0)
         return np.where(width > 1e-6, t * t * (3 - 2 * t), hard)
 
-    def surface_weight(self, v: np.ndarray, faces: np.ndarray, band: float = 0.6
-                       ) -> np.ndarray:
+    def surface_weight(self, v: np.ndarray, faces: np.ndarray, band: float = 0.6,
+                       blend: float = 0.0) -> np.ndarray:
         """:meth:`upper_weight` of a mesh's vertices, decided anew within ``band`` cm of the
         split inside the opening: each vertex goes to the side it is nearer to along the
         mesh. A lip's inner face curls behind the other lip and closed lips touch along a
         line, so vertices a few millimetres past any smooth surface still belong to the lip
         their surface runs to (else the upper lip's inner face hangs down with the lower).
         Shapes generated on a mesh use it; the FieldRig keeps the seed's rule (a field over
-        space: the same point moves alike on any mesh)."""
+        space: the same point moves alike on any mesh). ``blend`` (cm): where the two sides
+        are within this of equally near — skin the split crosses where the opening ends, at
+        the mouth or eye corners — the weight blends between them instead of jumping."""
         w = self.upper_weight(v)
         amb = (np.abs(self.signed(v)) < band) & ((w == 0.0) | (w == 1.0))
         sides = [np.flatnonzero(~amb & (w > 0.5)), np.flatnonzero(~amb & (w <= 0.5))]
@@ -295,6 +297,10 @@ class Split:
                         (e[:, 0], e[:, 1])), shape=(len(v), len(v))).tocsr()
         d_up, d_lo = (dijkstra(g, directed=False, indices=x, min_only=True) for x in sides)
         w = w.copy()
+        if blend > 0:
+            t = np.clip(0.5 + 0.5 * (d_lo - d_up) / blend, 0.0, 1.0)
+            w[amb] = (t * t * (3 - 2 * t))[amb]
+            return w
         w[amb & (d_up < d_lo)] = 1.0
         w[amb & (d_lo < d_up)] = 0.0
         return w
