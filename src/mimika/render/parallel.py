@@ -76,7 +76,7 @@ def _init(rig: Any, size: tuple[int, int], samples: int, skin: Any, lighting: An
     renderer = _open(rig, size, samples, skin, lighting, hidden)
     if camera is not None:  # set up now (occlusion, textures, shaders): one frame at rest
         renderer.render(camera=camera, aus={})
-    _worker.update(rig=rig, renderer=renderer)
+    _worker.update(rig=rig, renderer=renderer, ppid=ppid or os.getppid())
 
 
 def _ready() -> None:
@@ -94,7 +94,7 @@ def _render_chunk(values: np.ndarray, channels: Sequence[str], camera: Any
     first = next(frames)
     shape = (len(values), *first.shape)
     shm = shared_memory.SharedMemory(
-        f"{FRAMES}{os.getppid()}-{os.getpid()}-{next(_serial)}", create=True,
+        f"{FRAMES}{w['ppid']}-{os.getpid()}-{next(_serial)}", create=True,
         size=first.nbytes * len(values))
     try:
         out = np.ndarray(shape, np.uint8, buffer=shm.buf)
@@ -167,14 +167,15 @@ def _alive(pid: str) -> bool:
 
 def sweep_semaphores(shm: str = "/dev/shm") -> int:
     """Remove multiprocessing's named semaphores (``sem.mp-*``) of this user that no process
-    has open, and the blocks of frames (:data:`FRAMES`) whose render is gone: those of pools
-    killed outright with their whole process group, which nobody is left to release. Returns
-    how many were removed."""
+    has open, and the blocks of frames (:data:`FRAMES`) whose main process or worker is gone:
+    those of pools killed outright with their whole process group, which nobody is left to
+    release. Returns how many were removed."""
     import glob
 
     removed = 0
     for p in glob.glob(os.path.join(shm, FRAMES + "*")):
-        if _owned(p) and not _alive(os.path.basename(p)[len(FRAMES):].split("-")[0]):
+        parent, worker, *_ = [*os.path.basename(p)[len(FRAMES):].split("-"), "", ""]
+        if _owned(p) and not (_alive(parent) and _alive(worker)):
             with contextlib.suppress(OSError):
                 os.unlink(p)
                 removed += 1
