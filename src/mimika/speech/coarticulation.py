@@ -127,16 +127,17 @@ def _hold_windows(segs: Sequence[Segment], cls: str) -> list[tuple[float, float,
 
 
 def closure_weights(windows: Sequence[tuple[float, float, float]], *, fps: float, n_frames: int,
-                    ramp: float) -> np.ndarray:
+                    ramp: float, k0: int = 0) -> np.ndarray:
     """Per-frame weight in [0, 1] of a closure rule: 1 inside each hold window and on the two
-    frames around each apex, a raised-cosine ramp of ``ramp`` s outside; shape (n_frames,)."""
-    t = np.arange(n_frames) / fps
+    frames around each apex, a raised-cosine ramp of ``ramp`` s outside; shape (n_frames,)
+    for frames ``k0`` … (frame k at k / fps s)."""
+    t = (k0 + np.arange(n_frames)) / fps
     w = np.zeros(n_frames)
     for a, b, apex in windows:
         d = np.maximum(np.maximum(a - t, t - b), 0.0)
         w = np.maximum(w, np.where(d < ramp, 0.5 + 0.5 * np.cos(np.pi * d / max(ramp, 1e-9)), 0))
         f = apex * fps
-        for i in (math.floor(f), math.ceil(f)):
+        for i in (math.floor(f) - k0, math.ceil(f) - k0):
             if 0 <= i < n_frames:
                 w[i] = 1.0
     return w
@@ -162,8 +163,9 @@ def _rule_target(values: np.ndarray, channels: Sequence[str], rule: dict) -> np.
 
 def apply_closures(values: np.ndarray, channels: Sequence[str], *, fps: float,
                    bilabial: Sequence[tuple[float, float, float]],
-                   labiodental: Sequence[tuple[float, float, float]] = ()) -> np.ndarray:
-    """Enforce the closure rules on frames (shape (T, K)); returns a new array.
+                   labiodental: Sequence[tuple[float, float, float]] = (),
+                   k0: int = 0) -> np.ndarray:
+    """Enforce the closure rules on frames ``k0`` … (shape (T, K)); returns a new array.
 
     Windows are ``(hold_start, hold_end, apex)`` in seconds. At weight 1 (hold window and the
     frames bracketing the apex) the rule holds exactly; around it the frames blend into it.
@@ -180,7 +182,7 @@ def apply_closures(values: np.ndarray, channels: Sequence[str], *, fps: float,
         if not len(wins):
             continue
         rule = rules[name]
-        w = closure_weights(wins, fps=fps, n_frames=len(v), ramp=rule["ramp"])[:, None]
+        w = closure_weights(wins, fps=fps, n_frames=len(v), ramp=rule["ramp"], k0=k0)[:, None]
         v = (1 - w) * v + w * _rule_target(v, channels, rule)
         exact = w[:, 0] >= 1.0
         v[exact] = _rule_target(v[exact], channels, rule)
@@ -232,15 +234,25 @@ def mouth_track(utterance: Utterance, *, fps: float = 25.0, strength: float = 1.
     check_timeline(utterance.duration, fps, "the speech")  # before allocating the frames
     segs = segments(utterance)
     n = max(1, math.ceil(utterance.duration * fps - 1e-9))
+    vals = mouth_frames(segs, fps=fps, k0=0, n=n, strength=strength)
+    meta = {"source": "mimika.speech", "lang": utterance.lang,
+            "bilabial": _hold_windows(segs, "bilabial"),
+            "labiodental": _hold_windows(segs, "labiodental"), "pauses": pauses(utterance)}
+    return AUTrack(vals, mouth_aus(), fps, meta)
+
+
+def mouth_frames(segs: Sequence[Segment], *, fps: float, k0: int, n: int,
+                 strength: float = 1.0) -> np.ndarray:
+    """Mouth AU values (:func:`mouth_aus`) of frames ``k0 … k0 + n - 1`` (frame k at k / fps
+    s) of class segments ``segs``, as :func:`mouth_track` computes them; float32 (n, 13).
+
+    A frame depends on the segments within the coarticulation reach around it only, so a
+    stream can compute its frames from the segments heard so far."""
     sub = max(1, math.ceil(viseme_table()["coarticulation"]["subsample_hz"] / fps))
     offs = (np.arange(sub) - (sub - 1) / 2) / (sub * fps)
-    t = (np.arange(n)[:, None] / fps + offs[None, :]).ravel()
+    t = ((k0 + np.arange(n))[:, None] / fps + offs[None, :]).ravel()
     vals = coarticulate(segs, np.clip(t, 0, None)).reshape(n, sub, -1).mean(axis=1)
     vals = np.clip(vals * strength, 0.0, 1.0)
-    chans = mouth_aus()
-    bil = _hold_windows(segs, "bilabial")
-    lab = _hold_windows(segs, "labiodental")
-    vals = apply_closures(vals, chans, fps=fps, bilabial=bil, labiodental=lab)
-    meta = {"source": "mimika.speech", "lang": utterance.lang, "bilabial": bil,
-            "labiodental": lab, "pauses": pauses(utterance)}
-    return AUTrack(np.clip(vals, 0, 1).astype(np.float32), chans, fps, meta)
+    vals = apply_closures(vals, mouth_aus(), fps=fps, bilabial=_hold_windows(segs, "bilabial"),
+                          labiodental=_hold_windows(segs, "labiodental"), k0=k0)
+    return np.clip(vals, 0, 1).astype(np.float32)
