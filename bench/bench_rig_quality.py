@@ -1,16 +1,10 @@
 """``mimika rig`` on several heads: does any AU tear or flip the mesh?
 
 Each head is written as a bare file a user would bring (:mod:`mimika.face.rigging.samples`),
-rigged with each field style, and every AU and side is measured at intensities 0 → 1 on
-the face objects (UV-seam copies welded):
-
-* **stretch** — the longest edge at τ = 1 over its rest length (an edge's length is convex
-  in τ, so τ = 1 is its worst); an edge over 3× and 2 mm longer is counted as torn;
-* **flips** — triangles folded over (facing against the surface around them, so the mesh
-  creases onto itself) at τ = ½ or 1 that were not at rest; a lip rolling in turns its
-  triangles with it and is no fold;
-* **seam gap** — the largest distance (mm) between two copies of one vertex (a UV seam
-  that opens).
+rigged with each field style, and every AU and side is measured at intensities 0 → 1
+(:mod:`mimika.face.rigging.quality`: worst edge stretch, torn edges — over 3× and 2 mm
+longer —, folded triangles, seam gaps; on the surface seen from the front). ``--real``
+measures the ICT head's and a MakeHuman character's own shapes the same way, for reference.
 
 Heads: the built-in head (OBJ; GLB with eyes and teeth, standing 1.6 m up and turned 25°;
 decimated), a MakeHuman character's head (GLB with eyes and teeth, cut at UV seams;
@@ -33,69 +27,6 @@ import numpy as np
 from _common import ict_available, single_core
 
 single_core()
-
-#: an edge stretched beyond this many times its length, and by more than TORN_MM, is torn
-TORN, TORN_MM = 3.0, 2.0
-
-
-def folded(v: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Per triangle: does it face against the surface around it (its normal against the
-    mean normal at its corners: the mesh folds over onto itself there)?"""
-    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # area-weighted
-    vn = np.zeros_like(v)
-    for k in range(3):
-        np.add.at(vn, f[:, k], n)
-    around = vn[f].sum(1)
-    return (n * around).sum(1) < 0
-
-
-def triangle_checks(v: np.ndarray, f: np.ndarray, d: np.ndarray) -> tuple[float, int, int]:
-    """(worst edge stretch, torn edges, triangles folded over at τ = ½ or 1 that were not at
-    rest) of mesh (v, f) moved by ``d``."""
-    e = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), 1), axis=0)
-    l0 = np.linalg.norm(v[e[:, 1]] - v[e[:, 0]], axis=1)
-    l1 = np.linalg.norm(v[e[:, 1]] + d[e[:, 1]] - v[e[:, 0]] - d[e[:, 0]], axis=1)
-    ok = l0 > 1e-4
-    ratio = l1[ok] / l0[ok]
-    grown = (l1 - l0)[ok] * 10
-    flips = (folded(v + 0.5 * d, f) | folded(v + d, f)) & ~folded(v, f)
-    return (float(ratio.max(initial=1.0)), int(((ratio > TORN) & (grown > TORN_MM)).sum()),
-            int(flips.sum()))
-
-
-def measure(rig) -> list[dict]:
-    """Per AU and side: stretch, torn edges, flips and seam gap over the triangles of the
-    face objects seen from the front at rest (the inside of a mouth bag or socket folds
-    unseen, in real scans too)."""
-    from mimika.face.rigging.export import au_shapes
-    from mimika.face.rigging.features import depth_behind, welded
-
-    head = rig.head
-    meshes = {}
-    for o in head.objects:
-        if o.category != "face":
-            continue
-        labels = o.weld if o.weld is not None else np.arange(o.n_vertices)
-        _, first, inv = np.unique(labels, return_index=True, return_inverse=True)
-        v, f, _ = welded(o.vertices.astype(float), o.faces.astype(np.int64), first[inv])
-        depth, h = depth_behind(v, f)
-        f = f[np.all(depth[f] <= 3 * h, axis=1)]
-        meshes[o.name] = (v, f, first, first[inv])
-    rows = []
-    for code, per in au_shapes(rig).items():
-        row = {"au": code, "stretch": 1.0, "torn": 0, "flips": 0, "gap_mm": 0.0}
-        for name, d in per.items():
-            if name not in meshes:
-                continue
-            v, f, first, rep = meshes[name]
-            s, torn, flips = triangle_checks(v, f, d[first].astype(float))
-            row["stretch"] = max(row["stretch"], s)
-            row["torn"] += torn
-            row["flips"] += flips
-            row["gap_mm"] = max(row["gap_mm"], 10 * float(np.abs(d - d[rep]).max()))
-        rows.append(row)
-    return rows
-
 
 def heads(tmp: Path) -> list[tuple[str, Path]]:
     """(label, file) of the sample heads."""
@@ -188,6 +119,7 @@ def main() -> int:
                     "ICT head and a MakeHuman character, for reference")
     args = ap.parse_args()
     from mimika.face.rigging.autorig import rig_mesh
+    from mimika.face.rigging.quality import measure
 
     total = {"torn": 0, "flips": 0}
     if args.real:

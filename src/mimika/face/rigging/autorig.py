@@ -161,8 +161,9 @@ def _read(path: Path) -> tuple[list[_Source], object | None, str, int | None]:
                      for mat, (_, f) in zip(mats, m.primitives, strict=True)]
             uv = None if m.uvs is None else np.c_[m.uvs[:, 0], 1.0 - m.uvs[:, 1]]
             role = name_role(m.name, m.mesh_name)
-            cat = "body" if role is not None and motion(role.role) == "none" else \
-                mesh_category(m, sc, set())
+            cat = mesh_category(m, sc, set())
+            if cat == "face" and role is not None and motion(role.role) == "none":
+                cat = "body"  # hair, glasses, clothes: no fields
             sources.append(_Source(m.name, m.vertices, parts, uv, cat, mats))
         return sources, sc, "m", sc.vrm_version
     raise DataError(f"{path}: mimika rig reads .obj, .glb, .gltf and .vrm meshes")

@@ -111,6 +111,9 @@ def _exact(feat: FaceFeatures) -> np.ndarray:
     return np.stack([x, y, np.cross(x, y)])
 
 
+#: times the openings are looked for again from the frame they gave (a face turned 25° shows
+#: its eye and mouth cavities at an angle: the first frame is off by a degree or two)
+FRAME_ROUNDS = 3
 #: rotations smaller than this are taken as the file's convention (asymmetric openings)
 SNAP_DEG = 3.0
 
@@ -148,8 +151,14 @@ def detect_frame(v: np.ndarray, f: np.ndarray, *, kind: str = "obj", unit: str =
         raise DataError(f"{where}: no face found (no pair of eye openings above a mouth); "
                         "give its landmarks with --landmarks FILE (see docs/avatars.md)")
     _, r0, feat = best
-    r = _snap(_exact(feat) @ r0, r0)
-    feat = find_face(v @ r.T, f) or feat
+    r = r0
+    for _ in range(FRAME_ROUNDS):  # openings seen at an angle: look again from the front
+        r_next = _snap(_exact(feat) @ r, r0)
+        again = find_face(v @ r_next.T, f)
+        turn = np.degrees(np.arccos(np.clip((np.trace(r_next @ r.T) - 1) / 2, -1, 1)))
+        r, feat = r_next, again or feat
+        if again is None or turn < 0.2:
+            break
     s, unit_name, note = _unit(feat.eye_distance * _UNITS[unit], unit)
     t = EYE_MID_CM - s * 0.5 * (feat.eye_L + feat.eye_R)
 
