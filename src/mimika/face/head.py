@@ -31,17 +31,25 @@ ALPHA_MODES = ("opaque", "mask", "blend")
 class Texture:
     """An image painted on a part at its object's UVs: (H, W, 3 or 4) uint8, sRGB colour; row 0
     is the top of the image (v = 1). For skin materials the alpha channel is a gloss map
-    (specular scale, 255 = the material's own); for others it is opacity."""
+    (specular scale, 255 = the material's own); for others it is opacity. ``normal``, optional,
+    is a detail map at the same UVs: a tangent-space normal (RGB, glTF's convention: +x along
+    u, +y along v) and a roughness scale in alpha (0.5 + alpha / 255: 128 is the material's
+    own)."""
 
     image: np.ndarray
     name: str = ""
+    normal: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        img = np.asarray(self.image)
-        if img.dtype != np.uint8 or img.ndim != 3 or img.shape[2] not in (3, 4):
-            raise ValueError(f"texture {self.name!r}: need (H, W, 3|4) uint8, got "
-                             f"{img.shape} {img.dtype}")
-        object.__setattr__(self, "image", frozen_array(img, np.uint8))
+        for which in ("image", "normal"):
+            img = getattr(self, which)
+            if img is None:
+                continue
+            img = np.asarray(img)
+            if img.dtype != np.uint8 or img.ndim != 3 or img.shape[2] not in (3, 4):
+                raise ValueError(f"texture {self.name!r}: need (H, W, 3|4) uint8 {which}, "
+                                 f"got {img.shape} {img.dtype}")
+            object.__setattr__(self, which, frozen_array(img, np.uint8))
 
 
 @dataclass(frozen=True)

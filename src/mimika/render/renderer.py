@@ -43,6 +43,9 @@ MUCOSA = (0.376, 0.085, 0.077)
 INNER = ("eyes", "teeth")
 #: the key light's penumbra (cm) for soft and hard shadows
 PENUMBRA = {"soft": 0.45, "hard": 0.1}
+#: the mesh shader's variant (a ``#define``) of each shading model but the standard one:
+#: hair strands (textured parts only), the eye's sclera and iris, the cornea
+MODEL_DEFINES = {"hair": "HAIR", "eye": "EYE", "iris": "IRIS", "cornea": "CORNEA"}
 
 
 def srgb_to_linear(hex_color: str) -> tuple[float, float, float]:
@@ -207,17 +210,22 @@ class _GpuObject:
         self.groups: dict[int, int] = {}
         textured = obj.uvs is not None and any(p.texture is not None for p in obj.parts)
         self.textures: list[Any] = []
-        texs = []
+        #: detail maps (normal, roughness; :class:`~mimika.face.head.Texture`) by first index
+        self.details: dict[int, Any] = {}
+        texs, details = [], []
         for p in obj.parts:
             texs.append(_upload_texture(ctx, p.texture.image)
                         if textured and p.texture is not None else None)
-            if texs[-1] is not None:
-                self.textures.append(texs[-1])
+            details.append(_upload_texture(ctx, p.texture.normal)
+                           if texs[-1] is not None and p.texture.normal is not None else None)
+            self.textures += [t for t in (texs[-1], details[-1]) if t is not None]
         first = 0
         for i, f, groups in ranges:
             p, tex = obj.parts[i], texs[i]
             if groups is not None:
                 self.groups[first] = groups
+            if details[i] is not None:
+                self.details[first] = details[i]
             self.parts.append((material(p.material), first, 3 * len(f), tex,
                                p.alpha_mode if tex is not None else "opaque"))
             first += 3 * len(f)
@@ -711,15 +719,17 @@ class Renderer:
     def _shadows(self) -> bool:
         return self.lighting.shadows != "off"
 
-    def _program(self, gl: dict, textured: bool, hair: bool, depth_only: bool = False,
-                 groups: int = 0) -> Any:
-        """The mesh program variant: ``textured``, ``hair`` (strand shading), ``depth_only``
-        (texture coverage only, for a depth pre-pass), ``groups`` (the skin's appearance
-        changes: the wrinkle groups compiled in, 0 for none); compiled on first use with the
-        lights set."""
-        key = (("TEXTURED",) * textured + ("HAIR",) * hair + ("DEPTH_ONLY",) * depth_only
+    def _program(self, gl: dict, textured: bool, model: str = "standard",
+                 depth_only: bool = False, groups: int = 0, detail: bool = False) -> Any:
+        """The mesh program variant: ``textured``, the shading ``model`` (a material's:
+        :data:`MODEL_DEFINES`), ``depth_only`` (texture coverage only, for a depth pre-pass),
+        ``groups`` (the skin's appearance changes: the wrinkle groups compiled in, 0 for none),
+        ``detail`` (a normal and roughness map); compiled on first use with the lights set."""
+        shading = (MODEL_DEFINES[model],) if model in MODEL_DEFINES else ()
+        key = (("TEXTURED",) * textured + shading + ("DEPTH_ONLY",) * depth_only
                + ("SHADOWS",) * (self._shadows and not depth_only)
-               + ("WRINKLES", f"WR_GROUPS {groups}") * bool(groups and not depth_only))
+               + ("WRINKLES", f"WR_GROUPS {groups}") * bool(groups and not depth_only)
+               + ("DETAIL",) * (detail and not depth_only))
         progs = gl["progs"]
         if key not in progs:
             ctx = gl["ctx"]
@@ -831,9 +841,14 @@ class Renderer:
         object's vertex array for it."""
         textured = tex is not None
         groups = o.groups.get(first, 0) if self._wr is not None else 0
-        prog = self._program(gl, textured, textured and mat.model == "hair",
-                             textured and depth_only, groups)
+        detail = None if depth_only else o.details.get(first)
+        model = mat.model if textured or mat.model != "hair" else "standard"
+        prog = self._program(gl, textured, model, textured and depth_only, groups,
+                             detail is not None)
         self._set_material(prog, mat, tex, mode)
+        if detail is not None:
+            detail.use(location=2)
+            prog["u_detail"].value = 2
         if groups and not depth_only:
             write_wrinkles(prog, self._wr)
         return o.vao_for(prog)
@@ -896,7 +911,7 @@ class Renderer:
     def _create(self, ctx: Any, crop: Camera | None = None) -> dict[str, Any]:
         gl: dict[str, Any] = {"ctx": ctx, "attachments": []}
         gl["progs"] = {}
-        prog = self._program(gl, False, False)
+        prog = self._program(gl, False)
         lit = self.lighting
         studio = lit.backdrop == "studio"
         bg = ctx.program(

@@ -97,8 +97,9 @@ class _SkinObject:
                 continue
             ibo = ctx.buffer(good.tobytes())
             face = [(gpu.face_vbo, "3f", "in_face")] if gpu.face_vbo is not None else []
-            # pass (c) with the wrinkle groups that reach the part (none off the face)
-            final = final_for(gpu.groups.get(first, 0))
+            # pass (c) with the wrinkle groups that reach the part (none off the face) and its
+            # detail map if it has one
+            final = final_for(gpu.groups.get(first, 0), first in gpu.details)
             vaos = [ctx.vertex_array(p, [(gpu.vbo, VERTEX_LAYOUT, *VERTEX_ATTRIBUTES),
                                          (self.uv_vbo, "2f", "in_uv"), *face], ibo, 4,
                                      skip_errors=True) for p in (irr, final)]
@@ -146,16 +147,17 @@ class SkinShader:
         self.blur = ctx.program(vertex_shader=_shader("background.vert.glsl"),
                                 fragment_shader=_shader("skin_blur.frag.glsl"))
         #: pass (c) by the wrinkle groups compiled in (``final_defines`` and WR_GROUPS; 0:
-        #: neither, for parts off the face)
-        self.finals: dict[int, Any] = {}
+        #: neither, for parts off the face) and whether a detail map is (DETAIL)
+        self.finals: dict[tuple[int, bool], Any] = {}
 
-        def final_for(groups: int) -> Any:
-            if groups not in self.finals:
+        def final_for(groups: int, detail: bool) -> Any:
+            if (groups, detail) not in self.finals:
                 fd = (*defines, *final_defines, f"WR_GROUPS {groups}") if groups else defines
-                self.finals[groups] = ctx.program(
+                fd += ("DETAIL",) * detail
+                self.finals[groups, detail] = ctx.program(
                     vertex_shader=_shader("skin_final.vert.glsl", *fd),
                     fragment_shader=_shader("skin_final.frag.glsl", *fd))
-            return self.finals[groups]
+            return self.finals[groups, detail]
 
         # one UV frame for all skin parts: their bounding box → [0, 1]²
         used = []
@@ -297,6 +299,9 @@ class SkinShader:
         if albedo is not None:
             albedo.use(location=1)
             f["u_albedo"].value = 1
+        if first in gpu.details:
+            gpu.details[first].use(location=2)
+            f["u_detail"].value = 2
         f["u_proj"].write(proj_matrix.T.astype("f4").tobytes())
         f["u_base"].value = mat.color
         f["u_specular"].value = mat.specular * self.params.specular

@@ -21,6 +21,9 @@ in vec4 v_shadow;
 #ifdef WRINKLES
 #include "wrinkles.glsl"
 #endif
+#ifdef DETAIL
+#include "detail.glsl"
+#endif
 
 uniform vec3 u_base;        // linear base colour
 uniform sampler2D u_tex;
@@ -42,6 +45,7 @@ uniform float u_tint;       // 1 for skin-like materials (take u_mucosa inside t
 out vec4 f_color;
 
 vec3 base;
+float shininess;  // u_shininess, sharper or broader by the detail map's roughness
 
 vec3 diffuse(vec3 n, vec3 l) {
     float ndl = dot(n, l);
@@ -53,11 +57,11 @@ vec3 diffuse(vec3 n, vec3 l) {
 float specular(vec3 n, vec3 v, vec3 l) {
     float ndl = max(dot(n, l), 0.0);
     vec3 h = normalize(l + v);
-    float norm = (u_shininess + 8.0) / 25.1327;  // (n + 8) / (8 pi)
+    float norm = (shininess + 8.0) / 25.1327;  // (n + 8) / (8 pi)
     float x = 1.0 - max(dot(v, h), 0.0);
     float x2 = x * x;
     float fres = 1.0 + 2.0 * x2 * x2 * x;  // Schlick-style boost at grazing angles
-    return u_specular * norm * fres * pow(max(dot(n, h), 1e-4), u_shininess) * ndl;
+    return u_specular * norm * fres * pow(max(dot(n, h), 1e-4), shininess) * ndl;
 }
 
 // Hair (Kajiya-Kay): strands run along the surface's projection of world up (root to tip
@@ -82,6 +86,7 @@ vec3 hair_specular(vec3 n, vec3 v, vec3 l, vec3 t) {
 
 void main() {
     base = u_base;
+    shininess = u_shininess;
     float a = 1.0;
     float gloss = 1.0;
     vec3 n = normalize(v_normal);
@@ -121,6 +126,11 @@ void main() {
     float cavity;
     n = wrinkled_normal(n, v_pos, cavity);
     base *= cavity;
+#endif
+#ifdef DETAIL
+    float rough;
+    n = detail_normal(n, v_pos, v_uv, rough);
+    shininess = u_shininess / (rough * rough);
 #endif
 #ifdef HAIR
     vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);

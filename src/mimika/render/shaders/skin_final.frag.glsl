@@ -15,6 +15,9 @@ in vec4 v_shadow;
 #ifdef WRINKLES
 #include "wrinkles.glsl"
 #endif
+#ifdef DETAIL
+#include "detail.glsl"
+#endif
 
 uniform sampler2D u_irr;
 uniform vec3 u_base;
@@ -32,13 +35,15 @@ uniform vec3 u_mucosa;
 
 out vec4 f_color;
 
+float roughness;  // u_roughness scaled by the detail map
+
 vec3 specular(vec3 n, vec3 v, vec3 l, vec3 col) {
     float ndl = dot(n, l);
     if (ndl <= 0.0) return vec3(0.0);
     vec3 hu = l + v;
     vec3 h = normalize(hu);
     float ndh = max(dot(n, h), 1e-4);
-    float m2 = u_roughness * u_roughness;
+    float m2 = roughness * roughness;
     float t2 = (1.0 - ndh * ndh) / (ndh * ndh);
     float d = exp(-t2 / m2) / (3.14159 * m2 * ndh * ndh * ndh * ndh);
     float s = 1.0 - max(dot(h, v), 0.0), s2 = s * s;
@@ -57,6 +62,12 @@ void main() {
     float cavity = 1.0;
 #ifdef WRINKLES
     n = wrinkled_normal(n, v_pos, cavity);
+#endif
+    roughness = u_roughness;
+#ifdef DETAIL
+    float rough;
+    n = detail_normal(n, v_pos, v_tex, rough);
+    roughness *= rough;
 #endif
     float kv = 1.0;
 #ifdef SHADOWS

@@ -9,6 +9,8 @@ stays in ``piece.meta['uv_layout']``, so calling it again is safe).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from mimika.face.head import Part, Texture
@@ -31,12 +33,19 @@ def _texture(kind: str, piece: Piece, settings: dict, paint) -> Texture:
 
 
 def _skin_parts(piece: Piece, ch: Character) -> tuple[Part, ...]:
-    from mimika.face.makehuman.paint.skin import paint_body, paint_head, skin_layout
+    from mimika.face.makehuman.paint.skin import (
+        paint_body,
+        paint_head,
+        paint_head_detail,
+        skin_layout,
+    )
 
     region, uvs = skin_layout(piece)
     who = {"name": ch.name, "skin": ch.skin, "phenotype": ch.phenotype_values()}
     head = _texture("skin", piece, {**who, "hair": ch.hair, "hair_color": ch.hair_color},
                     lambda: paint_head(piece, ch))
+    detail = _texture("skin_detail", piece, who, lambda: paint_head_detail(piece, ch))
+    head = replace(head, normal=detail.image)
     body = _texture("skin_body", piece, who, lambda: paint_body(piece, ch))
     piece.meta.setdefault("uv_layout", piece.uvs)
     piece.uvs = uvs

@@ -29,6 +29,7 @@ from mimika.face.makehuman.paint.surface import (
     boundary_edges,
     cavity,
     diffuse,
+    face_jacobians,
     smooth_normals,
     welded,
 )
@@ -248,9 +249,15 @@ def _skin_noise(p: np.ndarray, c: np.ndarray, coarse: np.ndarray, seed: int,
     fine = value3(p, 0.3, seed + 10) - 0.5
     c = c * (1.0 + 0.05 * coarse[:, 0] + 0.04 * fine)[:, None]
     c = color.tint(c, (0.06 + 0.08 * light) * coarse[:, 1], (1.0, 0.84, 0.84))
-    pores = smoothstep(0.56, 0.8, value3(p, 0.045, seed + 30, order=1))
+    pores = _pores(p, seed)
     c = c * (1.0 - 0.03 * pores)[:, None]
     return c, pores
+
+
+def _pores(p: np.ndarray, seed: int) -> np.ndarray:
+    """The pores at points ``p`` (T, 3) in cm: 0 … 1 in a pore (the albedo's darker dots, the
+    gloss's breaks and the detail map's pits are the same)."""
+    return smoothstep(0.56, 0.8, value3(p, 0.045, seed + 30, order=1))
 
 
 def _coarse(pos: np.ndarray, seed: int) -> np.ndarray:
@@ -361,3 +368,101 @@ def _paint_body(at, pos, uv0, base, seed) -> np.ndarray:
     c = color.mix(c, c * 0.7 + 0.3 * np.array([0.8, 0.6, 0.6]), nails)
     g = 0.55 * (0.8 + 0.2 * (1 - pores)) + 0.4 * nails
     return at.image(color.rgba8(c, g))
+
+
+# ---------------------------------------------------------------- detail (normal, roughness)
+#: the skin's fine relief, depths in cm: pores (T-zone and cheeks deepest), a grain of soft
+#: bumps about a millimetre across (what reads at 720p), fine lines by region that deepen
+#: with age, the lips' vertical lines; ``rough``: roughness scale by region (glossy T-zone,
+#: nose and lips, matte cheeks) and in pores
+DETAIL = {"pore": 0.004, "grain": 0.005, "grain_cm": 0.3, "line": 0.008, "lip": 0.006,
+          "rough": {"cheeks": 0.3, "nose": -0.25, "tzone": -0.15, "lips": -0.35,
+                    "beard": 0.2, "age": 0.15, "pores": 0.2, "noise": 0.15}}
+
+
+def paint_head_detail(piece: Piece, character: Character) -> np.ndarray:
+    """RGBA detail map of the head atlas (``HEAD_SIZE``, the UVs of :func:`paint_head`):
+    tangent-space normal of the skin's fine relief (RGB; +x along u, +y along v) and a
+    roughness scale (alpha: 0.5 + a / 255)."""
+    region, uvs = skin_layout(piece)
+    tris = piece.parts["skin"][region < 2]
+    pos = piece.vertices.astype(np.float64) * CM
+    at = rasterize(uvs, tris, HEAD_SIZE)
+    jac = face_jacobians(pos, uvs, tris)[at.faces_at()]  # (T, 3, 2): cm per UV unit
+    u0 = at.at(piece.meta.get("uv_layout", piece.uvs))
+    return _paint_head_detail(at, pos, u0, jac, landmarks(piece), _phenotype(character),
+                              _seed(character))
+
+
+def _lines(t: np.ndarray, width: float) -> np.ndarray:
+    """Furrows (0 … -1) at the integers of ``t``, ``width`` (in units of t) wide."""
+    d = t - np.round(t)
+    return -np.exp(-(d / width) ** 2).astype(np.float32)
+
+
+def _fine_lines(p: np.ndarray, f: _Face, seed: int) -> np.ndarray:
+    """Fine lines (0 … about -1) at points ``p`` (T, 3) in cm: forehead, crow's feet, under
+    the eyes, above the upper lip, the neck's rings."""
+    lm = f.lm
+    x, y = p[:, 0], p[:, 1]
+    wob = value3(p, 0.8, seed + 80) - 0.5  # lines wander and fade in and out
+    fade = smoothstep(0.3, 0.6, value3(p, 0.5, seed + 81))
+    out = 0.8 * f.forehead(p) * smoothstep(5.0, 3.0, np.abs(x)) \
+        * _lines((y - f.brow_y) / 0.9 + 0.6 * wob, 0.07)
+    for corner, side in ((lm[36], -1.0), (lm[45], 1.0)):
+        q = p - corner
+        lat = side * q[:, 0]
+        r = np.hypot(lat, q[:, 1])
+        ang = np.arctan2(q[:, 1], np.maximum(lat, 1e-6))
+        where = smoothstep(0.2, 0.5, r) * smoothstep(2.2, 1.2, r) * smoothstep(0.0, 0.3, lat) \
+            * smoothstep(1.1, 0.6, np.abs(ang)) * f.front(p)
+        out += where * _lines(ang / 0.28 + 0.8 * wob, 0.12)
+    below = f.undereye(p)
+    lid = np.interp(np.abs(x), np.abs(lm[[39, 40, 41, 36], 0]), lm[[39, 40, 41, 36], 1])
+    out += 0.7 * below * _lines((lid - y) / 0.22 + 0.5 * wob, 0.1)
+    lip = smoothstep(0.9, 0.3, np.abs(x)) * smoothstep(lm[33, 1] - 0.2, lm[33, 1] - 0.6, y) \
+        * smoothstep(lm[51, 1] - 0.1, lm[51, 1] + 0.4, y) * f.front(p)
+    out += 0.6 * lip * _lines(x / 0.3 + 0.7 * wob, 0.1)
+    neck = smoothstep(f.chin[1] - 1.5, f.chin[1] - 3.5, y)
+    out += 0.8 * neck * _lines((y - f.chin[1]) / 1.4 + 0.5 * wob, 0.05)
+    return out * (0.4 + 0.6 * fade)
+
+
+def _paint_head_detail(at, pos, u0, jac, lm, ph, seed) -> np.ndarray:
+    f = _Face(lm)
+    p = at.at(pos)
+    d = DETAIL
+    cheeks, nose, tz = (at.at(g(pos)) for g in (f.cheeks, f.nose, f.tzone))
+    beard = at.at(f.beard(pos)) * ph["male"]
+    lips = sample(uv_mask("lips"), u0, bilinear=True)
+    lids = sample(uv_mask("eyelids"), u0, bilinear=True)
+    smooth = 1.0 - np.clip(lips + 0.7 * lids, 0, 1)  # lips and lids: no pores or grain
+    age = float(smoothstep(22.0, 70.0, np.float32(ph["age"])))
+    pores = _pores(p, seed)
+    depth = 0.45 + 0.55 * np.clip(np.maximum(nose, np.maximum(cheeks, 0.8 * tz)), 0, 1)
+    h = -d["pore"] * pores * depth * smooth
+    h += d["grain"] * fbm3(p, d["grain_cm"], seed + 70, octaves=3, gain=0.6) * smooth
+    h += d["line"] * (0.25 + 0.75 * age) * _fine_lines(p, f, seed) * smooth
+    h += d["lip"] * lips * (value3(p / np.array([0.06, 0.7, 0.06]), 1.0, seed + 50, order=1)
+                            - 0.5)
+    r = d["rough"]
+    rough = 1.0 + r["cheeks"] * cheeks + r["nose"] * nose + r["tzone"] * tz + r["lips"] * lips \
+        + r["beard"] * beard + r["age"] * age + r["pores"] * pores \
+        + r["noise"] * fbm3(p, 0.25, seed + 90, octaves=2)
+    return _normal_map(at, h, jac, np.clip(rough, 0.5, 1.5) - 0.5)
+
+
+def _normal_map(at, h: np.ndarray, jac: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """RGBA8 tangent-space normals of the heights ``h`` (T,) in cm over the atlas ``at`` whose
+    texels span ``jac`` (T, 3, 2: cm per UV unit along u and v), and ``alpha`` (T,) in 0 … 1."""
+    hgt = at.image(h.astype(np.float32))
+    gy, gx = np.gradient(hgt)  # per texel; rows run down the image (-v)
+    cm_u = at.image(np.linalg.norm(jac[:, :, 0], axis=1).astype(np.float32)) / at.w
+    cm_v = at.image(np.linalg.norm(jac[:, :, 1], axis=1).astype(np.float32)) / at.h
+    su = np.clip(gx / np.maximum(cm_u, 1e-6), -1, 1)
+    sv = np.clip(-gy / np.maximum(cm_v, 1e-6), -1, 1)
+    n = np.stack([-su, -sv, np.ones_like(su)], -1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    rgb = np.round((n * 0.5 + 0.5) * 255.0).astype(np.uint8)
+    a = np.round(np.clip(at.image(alpha.astype(np.float32)), 0, 1) * 255.0).astype(np.uint8)
+    return np.concatenate([rgb, a[..., None]], -1)
