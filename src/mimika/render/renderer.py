@@ -544,6 +544,7 @@ class Renderer:
             fbo.clear(0.0, 0.0, 0.0, 1.0, depth=1.0)
             ctx.disable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
             self._backdrop(gl, ctx, fbo)
+            fbo.scissor = gl.get("above_desk")
             ctx.enable(ctx.DEPTH_TEST)
             self._view = (cam.view_matrix.T.astype("f4").tobytes(),
                           cam.projection_matrix.T.astype("f4").tobytes())
@@ -930,6 +931,10 @@ class Renderer:
             gl["desk_vao"] = ctx.vertex_array(desk, [])
             rows = min(int(np.ceil((lit.desk + 0.006) * self.size[1])) + 1, self.size[1])
             gl["desk_rect"] = (0, 0, self.size[0], rows)
+            # the rows the desk covers opaquely (its alpha is 1 up to u_top - 0.001; one row
+            # of margin) are not worth drawing anything into before it
+            hidden = max(int(np.floor((lit.desk - 0.001) * self.size[1] - 0.5)), 0)
+            gl["above_desk"] = (0, hidden, self.size[0], self.size[1] - hidden)
         gl["bg_prog"] = bg
         gl["bg_vao"] = ctx.vertex_array(bg, [])
 
