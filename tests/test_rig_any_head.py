@@ -116,3 +116,15 @@ def test_no_tears_and_few_folds_at_au_extremes(builtin_files, style):
     assert set(torn) <= {"AU25", "AU25L", "AU25R", "AU26", "AU27"}, torn
     assert sum(x["flips"] for x in rows) <= 40 and max(x["flips"] for x in rows) <= 6
     assert max(x["gap_mm"] for x in rows) == 0.0
+
+
+def test_strength_scales_the_shapes(builtin_files, tmp_path, capsys):
+    r1 = rig_mesh(builtin_files["obj"])
+    r2 = rig_mesh(builtin_files["obj"], strength=0.7)
+    a, b = r1.shapes["jawOpen"]["skin"], r2.shapes["jawOpen"]["skin"]
+    assert np.allclose(b, 0.7 * a, atol=1e-6)
+    for bad in ("0", "5", "nan"):
+        assert main(["rig", str(builtin_files["obj"]), "-o", str(tmp_path / "x.glb"),
+                     "--strength", bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "--strength" in err and len(err.splitlines()) == 1

@@ -18,14 +18,19 @@ def cmd_rig(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in (".glb", ".gltf"):
         raise ParameterError(f"output {str(out)!r} must end in .glb or .gltf")
-    r = rig_mesh(args.mesh, landmarks=args.landmarks, style=args.style)
+    if not 0.1 <= args.strength <= 3.0:
+        raise ParameterError(f"--strength {args.strength:g} must be within 0.1 and 3")
+    r = rig_mesh(args.mesh, landmarks=args.landmarks, style=args.style, strength=args.strength)
     path, arkit = write_rigged(out, r.rig, arkit_shapes(r.shapes))
     head = r.head
     aus = [c for c in r.rig.supported if len(c) == 4]
     if not args.quiet:
-        print(f"face: {r.frame.describe()}")
+        print(f"face: {r.frame.describe()} (for animating; the file stays where it is)")
         print("objects: " + ", ".join(f"{o.name} ({o.category}, {o.n_vertices} vertices)"
                                       for o in head.objects))
+        n_meshes = len(head.meta["gltf"].scene.meshes)
+        print(f"kept: the input's {n_meshes} mesh{'es' if n_meshes > 1 else ''} as they were "
+              "(place, vertex order, UVs, materials), morph targets added")
         print(f"wrote {path}: {len(aus)} AUs ({len([c for c in r.rig.supported if len(c) > 4])}"
               f" one-sided), {len(arkit)} ARKit shapes in {sum(r.seconds.values()):.1f} s")
         missing = [a for a in ("tongueOut",) if a not in arkit]
@@ -83,5 +88,8 @@ def register(sub) -> None:
                    help="whose shapes the fields were fitted on: ict (light-stage scans of an "
                    "actor, strong; default) or makehuman (artist-made faceunits, about half "
                    "as strong)")
+    r.add_argument("--strength", type=float, default=1.0, help="a factor on every generated "
+                   "shape (default 1; 0.7 brings the ict style to a MakeHuman-like head's own "
+                   "strength, see docs/avatars.md)")
     r.add_argument("-q", "--quiet", action="store_true", help="print nothing")
     r.set_defaults(func=cmd_rig)

@@ -248,10 +248,11 @@ def _keep_source(head: Head, path: Path, sources: list[_Source], scene: object |
                                      bones)
 
 
-def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: str = "ict"
-             ) -> RiggedMesh:
+def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: str = "ict",
+             strength: float = 1.0) -> RiggedMesh:
     """Rig the mesh at ``path`` (see the module doc); ``style``: whose shapes the fields were
-    fitted on (:data:`~mimika.face.rigging.generate.STYLES`)."""
+    fitted on (:data:`~mimika.face.rigging.generate.STYLES`); ``strength``: a factor on every
+    generated shape."""
     t0 = time.perf_counter()
     p = Path(path)
     if not p.is_file():
@@ -307,6 +308,9 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: st
                                                   for o, pc in zip(objs, pieces, strict=True)})
     t2 = time.perf_counter()
     shapes = generate_shapes(head, style=style)
+    if strength != 1.0:
+        shapes = {n: {o: (d * strength).astype(np.float32) for o, d in per.items()}
+                  for n, per in shapes.items()}
     t3 = time.perf_counter()
     rig, cover = build_rig(head, shapes, {n: f"{n} (fields)" for n in shapes})
     head.meta["coverage"] = cover
