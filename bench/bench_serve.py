@@ -1,9 +1,29 @@
 """``mimika serve`` latency: speak a short sentence over the WebSocket and time the first
 frames and the first audio (warm server), per engine; then N clients speaking at once.
 
-Run: ``.venv/bin/python bench/bench_serve.py [--clients 8]``  (goal, issue 29: first audio and
-first frame ≤ 250 ms for a short sentence on 2 cores)
+``listen`` (lip-sync frames from the agent's own audio, fed in 50 ms chunks):
+
+* latency — audio instant → frame out of ``ListenStream.feed`` (its look-ahead included),
+  median and 95th percentile, CPU seconds (thread time) per second of audio; one stream and
+  N streams at once in one process, fed in real time;
+* real-time factor of N streams — wall time to take N streams' audio as fast as it comes in
+  one process (the server's threads), per second of audio (< 1: keeps up);
+* on the GRID test split (``_grid.is_test``: never trained on), against the offline
+  audio-only result (``recognise`` + ``mouth_track``: frames whose 13 mouth AUs all lie within
+  0.05, frames with the same viseme; also per look-ahead) and against the transcript-aligned
+  visemes (Oculus-15, per 30 fps frame), and the aligned /p b m/ whose lips close within ± 1
+  frame — streamed, offline, and offline with pocketsphinx's phone recogniser (the engine
+  before);
+* the same agreement on written sentences of the Piper voice and espeak-ng against their
+  own phone timing (voices other than GRID's speaker).
+
+Run: ``.venv/bin/python bench/bench_serve.py [--clients 8] [--part listen|speak]``  (goals,
+issue 29: first audio and first frame ≤ 250 ms for a short sentence on 2 cores; listen: frame
+≤ 150 ms after its instant, 8 streams in real time on 2 cores, ≥ 95 % of frames as offline,
+≥ 70 % visemes as the aligned transcript)
 """
+
+from __future__ import annotations
 
 import argparse
 import json
@@ -16,7 +36,15 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+CHUNK = 0.05  #: seconds of audio per listen message
+LOOKAHEADS = (0.1, 0.15, 0.2, 0.3, 0.5)
+SENTENCES = ("Bob bought a big map, and a blue pub.",
+             "Please move the purple bottle beside my lamp.",
+             "We might maybe meet by the bay before the rain comes.",
+             "Good evening. The city council met on Monday to discuss the new budget.",
+             "Thank you for calling; your order will ship on Friday morning.")
 SHORT = "Here is the news."
 LONG = ("Good evening. The city council met on Monday to discuss the new budget for public "
         "transport. Buses will run more often.")
@@ -59,27 +87,40 @@ def speak(url: str, text: str) -> dict[str, float]:
                 return out
 
 
-def listen_latency(audio, sr: int, n_streams: int) -> tuple[float, float, float]:
-    """``n_streams`` listen streams fed in real time (50 ms chunks) at once: the median and
-    95th percentile of (frame received − its instant) in ms, and CPU s per s of audio."""
-    import numpy as np
+def stream(audio, sr: int, *, lookahead: float | None = None, clock: float | None = None,
+           lat: list[float] | None = None) -> list[dict]:
+    """Feed ``audio`` in :data:`CHUNK` s pieces to a ``ListenStream``; its frames. With
+    ``clock`` (a perf_counter start) each piece waits until it "has been recorded" and each
+    frame's latency (ms) goes to ``lat``."""
+    from mimika.serve.listen import LOOKAHEAD, ListenStream
 
-    from mimika.serve.listen import ListenStream
+    st = ListenStream(sr, lookahead=LOOKAHEAD if lookahead is None else lookahead)
+    step = int(CHUNK * sr)
+    out: list[dict] = []
+    for i, k in enumerate(range(0, len(audio), step)):
+        if clock is not None:
+            wait = clock + (i + 1) * CHUNK - time.perf_counter()
+            if wait > 0:
+                time.sleep(wait)
+        got = st.feed(audio[k:k + step], final=k + step >= len(audio))
+        if clock is not None and lat is not None:
+            now = time.perf_counter() - clock
+            lat += [(now - f["t"]) * 1000 for f in got]
+        out += got
+    return out
+
+
+def listen_latency(audio, sr: int, n_streams: int) -> tuple[float, float, float]:
+    """``n_streams`` listen streams fed in real time at once: the median and 95th percentile
+    of (frame out − its instant) in ms, and CPU s per s of audio per stream."""
+    import numpy as np
 
     lat: list[float] = []
     cpu: list[float] = []
 
     def run() -> None:
-        st = ListenStream(sr)
-        step = int(0.05 * sr)
-        t_start = time.perf_counter()
         c0 = time.thread_time()
-        for i, k in enumerate(range(0, len(audio), step)):
-            wait = t_start + (i + 1) * 0.05 - time.perf_counter()
-            if wait > 0:
-                time.sleep(wait)  # the chunk has been "recorded"
-            for f in st.feed(audio[k:k + step], final=k + step >= len(audio)):
-                lat.append((time.perf_counter() - t_start - f["t"]) * 1000)
+        stream(audio, sr, clock=time.perf_counter(), lat=lat)
         cpu.append(time.thread_time() - c0)
 
     ths = [threading.Thread(target=run) for _ in range(n_streams)]
@@ -91,17 +132,139 @@ def listen_latency(audio, sr: int, n_streams: int) -> tuple[float, float, float]
             sum(cpu) / (n_streams * len(audio) / sr))
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--clients", type=int, default=8)
-    args = ap.parse_args()
+def listen_rtf(audio, sr: int, n_streams: int) -> float:
+    """Wall seconds for ``n_streams`` streams fed as fast as they are taken, in threads of one
+    process, per second of audio (< 1: the streams keep up with real time)."""
+    ths = [threading.Thread(target=stream, args=(audio, sr)) for _ in range(n_streams)]
+    t0 = time.perf_counter()
+    for th in ths:
+        th.start()
+    for th in ths:
+        th.join()
+    return (time.perf_counter() - t0) / (len(audio) / sr)
+
+
+class Tally:
+    """Per-frame agreement counts of one comparison."""
+
+    def __init__(self) -> None:
+        self.n = self.aus = self.vis = 0
+
+    def add(self, a: list[dict], b: list[dict]) -> None:
+        from mimika.speech.coarticulation import mouth_aus
+
+        for f, g in zip(a, b, strict=False):
+            self.n += 1
+            self.aus += max(abs(f.get(c, 0) - g.get(c, 0)) for c in mouth_aus()) <= 0.05
+            self.vis += f.get("viseme") == g.get("viseme")
+
+    def pct(self, what: str) -> str:
+        return f"{100 * getattr(self, what) / max(self.n, 1):5.1f} %"
+
+
+def wire(u) -> list[dict]:
+    """The 30 fps wire frames of an utterance's mouth (with visemes)."""
+    from mimika.serve.frames import frames
+    from mimika.serve.speech import FPS
+    from mimika.speech.coarticulation import mouth_track
+    from mimika.speech.export import viseme_cues
+
+    return frames(mouth_track(u, fps=FPS), cues=viseme_cues(u))
+
+
+def closed(frames: list[dict], apex: list[float]) -> int:
+    """Aligned /p b m/ apexes whose lips close in ``frames`` within ± 1 frame."""
+    from mimika.speech.coarticulation import closure_ok
+
+    return sum(any(closure_ok(frames[j]) for j in range(max(0, round(t * 30) - 1),
+                                                         min(len(frames), round(t * 30) + 2)))
+               for t in apex)
+
+
+def listen_accuracy(items) -> None:
+    """``items``: (name, audio, sr, reference Utterance). Prints agreement and closures."""
+    from mimika.speech.alignment import recognise
+    from mimika.speech.coarticulation import bilabial_apex_times
+
+    off, per_la = Tally(), {la: Tally() for la in LOOKAHEADS}
+    ref = {k: Tally() for k in ("stream", "offline", "sphinx")}
+    hits = dict.fromkeys(ref, 0)
+    n_b = 0
+    for _, a, sr, truth in items:
+        frames = {"stream": stream(a, sr), "offline": wire(recognise(a, sr=sr)),
+                  "sphinx": wire(recognise(a, sr=sr, engine="sphinx"))}
+        off.add(frames["stream"], frames["offline"])
+        for la in LOOKAHEADS:
+            per_la[la].add(stream(a, sr, lookahead=la), frames["offline"])
+        truth_frames = wire(truth)
+        apex = bilabial_apex_times(truth)
+        n_b += len(apex)
+        for k, fr in frames.items():
+            ref[k].add(fr, truth_frames)
+            hits[k] += closed(fr, apex)
+    print(f"  streamed vs offline audio-only: {off.pct('aus')} of {off.n} frames with every "
+          f"mouth AU within 0.05, {off.pct('vis')} with the same viseme (goal ≥ 95 %)")
+    print("  by look-ahead: " + ", ".join(f"{1000 * la:.0f} ms {per_la[la].pct('aus')}"
+                                         for la in LOOKAHEADS) + " (AUs within 0.05)")
+    print(f"  visemes as the aligned transcript (goal ≥ 70 %): streamed {ref['stream'].pct('vis')}"
+          f", offline {ref['offline'].pct('vis')}, offline pocketsphinx "
+          f"{ref['sphinx'].pct('vis')}")
+    print(f"  /p b m/ closed within ± 1 frame: streamed {hits['stream']}/{n_b}, offline "
+          f"{hits['offline']}/{n_b}, offline pocketsphinx {hits['sphinx']}/{n_b}", flush=True)
+
+
+def grid_items():
+    from _grid import grid_dir, ids, is_test, load, references
+
+    d = grid_dir()
+    test = [u for u in ids(d) if is_test(u)]
+    refs = references(d, test)
+    return [(u, *load(d, u), refs[u]) for u in test]
+
+
+def tts_items():
+    from mimika.speech.tts import synthesize
+
+    out = []
+    for engine in ("piper", "espeak"):
+        for text in SENTENCES:
+            u = synthesize(text, engine=engine, rate=150)
+            out.append((f"{engine}: {text}", u.audio, u.sr, u))
+    return out
+
+
+def listen(clients: int) -> None:
+    from mimika.serve.listen import ListenStream
     from mimika.speech.tts import synthesize
 
     u = synthesize(LONG, engine="piper")
-    for n in (1, args.clients):
+    print(f"listen: look-ahead {1000 * ListenStream(u.sr).lookahead:.0f} ms, "
+          f"{1000 * CHUNK:.0f} ms chunks; a {u.duration:.1f} s Piper recording")
+    for n in (1, clients):
         med, p95, cpu = listen_latency(u.audio, u.sr, n)
-        print(f"listen  {n} stream(s) in real time: frame latency median {med:.0f} ms, p95 "
-              f"{p95:.0f} ms (goal ≤ 150 ms); {cpu:.2f} s CPU per s of audio per stream")
+        print(f"  {n} stream(s) in real time: frame latency median {med:.0f} ms, p95 "
+              f"{p95:.0f} ms (goal ≤ 150 ms); {cpu:.3f} s CPU per s of audio per stream",
+              flush=True)
+    print(f"  {clients} streams as fast as taken: {listen_rtf(u.audio, u.sr, clients):.3f} s "
+          f"wall per s of audio (real-time factor; goal < 1)", flush=True)
+    print("GRID test split (speaker s1, utterances never trained on):")
+    listen_accuracy(grid_items())
+    print("Other voices (written sentences; reference: the synthesiser's phone timing):")
+    listen_accuracy(tts_items())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--clients", type=int, default=8)
+    ap.add_argument("--part", choices=("all", "listen", "speak"), default="all")
+    args = ap.parse_args()
+    if args.part in ("all", "listen"):
+        listen(args.clients)
+    if args.part in ("all", "speak"):
+        speak_bench(args.clients)
+
+
+def speak_bench(clients: int) -> None:
     for engine in ("piper", "espeak"):
         os.environ["MIMIKA_TTS"] = engine
         srv, url = serve()
@@ -113,7 +276,7 @@ def main() -> None:
               f"(median of 5; goal ≤ 250 ms → ratio {max(fr, au) / 250:.2f})")
         results: list[dict[str, float]] = []
         ths = [threading.Thread(target=lambda r=results, u=url: r.append(speak(u, LONG)))
-               for _ in range(args.clients)]
+               for _ in range(clients)]
         t0 = time.perf_counter()
         for th in ths:
             th.start()
@@ -121,7 +284,7 @@ def main() -> None:
             th.join()
         wall = time.perf_counter() - t0
         speech = sum(r["duration"] for r in results) / 1000
-        print(f"{engine:7} {args.clients} clients at once: first audio median "
+        print(f"{engine:7} {clients} clients at once: first audio median "
               f"{statistics.median(r['audio'] for r in results):.0f} ms, worst "
               f"{max(r['audio'] for r in results):.0f} ms; {speech:.1f} s of speech in "
               f"{wall:.1f} s ({speech / wall:.1f}× real time in all)")

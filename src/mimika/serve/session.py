@@ -234,7 +234,7 @@ class Session:
                                      "with \"final\": true")
             st = self.streams[sid] = ListenStream(
                 int(_num(data, "sr", 16000, 4000, 96000)), lang=_str(data, "lang", "en"),
-                hop=_num(data, "hop", HOP, 0.05, 1.0),
+                hop=_num(data, "hop", HOP, 0.0, 1.0),
                 lookahead=_num(data, "lookahead", LOOKAHEAD, 0.0, 1.0))
         raw = data.get("data", "")
         try:

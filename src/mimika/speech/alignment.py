@@ -344,22 +344,42 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     return Utterance(a, int(sr), phones, words, sents, lang=code, text=transcript, meta=meta)
 
 
-def recognise(audio: np.ndarray, *, sr: int, lang: str = "en") -> Utterance:
-    """Lip-sync input from audio alone: the phones pocketsphinx's en-us phone model hears.
+RECOGNISERS = ("frames", "sphinx")  #: engines of :func:`recognise`
 
-    No transcript, so no words. Every language goes through the English phone model (its 39
-    phones cover the mouth shapes — viseme classes — of most languages; vowels of other
-    languages land on the nearest English one); ``lang`` only selects the viseme overrides.
+
+def recognise(audio: np.ndarray, *, sr: int, lang: str = "en", engine: str = "frames"
+              ) -> Utterance:
+    """Lip-sync input from audio alone: the phones heard, no transcript, so no words.
+
+    ``engine``: ``frames`` (default) — the streaming recogniser's mouth classes
+    (:mod:`mimika.speech.streaming`, every 10 ms decided after a 72 ms look-ahead, as
+    ``mimika serve``'s ``listen`` gets them), each class as one phone; ``sphinx`` — the phones
+    pocketsphinx's en-us phone model hears in the whole recording. Every language goes
+    through the English model (its classes cover the mouth shapes of most languages; vowels
+    of other languages land on the nearest English one); ``lang`` only selects the viseme
+    overrides.
     """
     from mimika.speech import espeak, sphinx
 
     a = valid_audio(audio, sr=sr)
     if len(a) < sr * 0.1:
         raise ParameterError(f"audio is {len(a) / sr:.3f} s long; need at least 0.1 s of speech")
+    if engine not in RECOGNISERS:
+        raise ParameterError(f"engine {engine!r} is not one of {', '.join(RECOGNISERS)}")
     code = espeak.check_lang(lang)
-    if not sphinx.available():
-        raise ParameterError("lip-sync without a transcript needs pocketsphinx "
-                             "(pip install 'pocketsphinx==5.1.1'); or give --transcript")
-    phones = sphinx.recognise_phones(a, sr=int(sr))
+    if engine == "sphinx":
+        if not sphinx.available():
+            raise ParameterError("lip-sync without a transcript needs pocketsphinx "
+                                 "(pip install 'pocketsphinx==5.1.1'); or give --transcript")
+        phones = sphinx.recognise_phones(a, sr=int(sr))
+        name = "sphinx-phones"
+    else:
+        from mimika.speech import streaming
+
+        dur = len(a) / sr
+        phones = [Phone(p.symbol, p.start, min(p.end, dur), p.stress)
+                  for p in streaming.class_phones(streaming.recognise_classes(a, sr=int(sr)))
+                  if p.start < dur]
+        name = "frames"
     return Utterance(a, int(sr), phones, [], [], lang="en" if code.startswith("en") else code,
-                     text="", meta={"source": "recognition", "engine": "sphinx-phones"})
+                     text="", meta={"source": "recognition", "engine": name})
