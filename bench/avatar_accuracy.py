@@ -170,6 +170,7 @@ def evaluate(name: str, v, f, truth: dict, arkit: bool, tmp: Path,
         gen = np.zeros((len(v), 3))  # the shape on the file's vertices, from every piece
         for obj, (_, idx) in r.head.meta["gltf"].pieces.items():
             if obj in r.shapes[key]:
+                idx = np.arange(len(r.shapes[key][obj])) if idx is None else idx
                 gen[idx[idx < len(v)]] = r.shapes[key][obj][idx < len(v)]
         real_h = fr.apply_vector(real)  # file units → head frame, cm
         mag = np.linalg.norm(real_h, axis=1)

@@ -229,10 +229,10 @@ def _part(material: str, faces: np.ndarray, category: str, mat=None) -> Part:
 
 
 def _keep_source(head: Head, path: Path, sources: list[_Source], scene: object | None,
-                 frame: Frame, where: dict[str, tuple[int, np.ndarray]]) -> None:
+                 frame: Frame, where: dict[str, tuple[int, np.ndarray | None]]) -> None:
     """``head.meta["gltf"]``: the file the output is written over — the input, or an OBJ's
     GLB twin (in a folder that lives as long as the head, ``meta["twin"]``) — and where
-    each object's vertices are in it."""
+    each object's vertices are in it (None: the whole mesh)."""
     from mimika.face.heads.gltf_export import AvatarSource
     from mimika.face.heads.gltf_scene import read_gltf
 
@@ -304,8 +304,10 @@ def rig_mesh(path: str | Path, *, landmarks: str | Path | None = None, style: st
     head = Head(p.stem, tuple(objs), lm_idx, head_anchors(skin_v, lm_pts, eyes),
                 landmark_object="skin", description=f"rigged by mimika from {p}",
                 meta={"source": str(p), "frame": frame.describe(), "frame_obj": frame})
-    _keep_source(head, p, sources, scene, frame, {o.name: (pc.src, pc.index)
-                                                  for o, pc in zip(objs, pieces, strict=True)})
+    whole = [len(pc.index) == len(sources[pc.src].vertices) for pc in pieces]
+    _keep_source(head, p, sources, scene, frame,
+                 {o.name: (pc.src, None if w else pc.index)
+                  for o, pc, w in zip(objs, pieces, whole, strict=True)})
     t2 = time.perf_counter()
     shapes = generate_shapes(head, style=style)
     if strength != 1.0:
