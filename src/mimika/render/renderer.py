@@ -551,38 +551,40 @@ class Renderer:
             for p in gl["progs"].values():
                 p["u_view"].write(self._view[0])
                 p["u_proj"].write(self._view[1])
-            glass, cut, soft, fringe = [], [], [], []
+            opaque, glass, cut, soft, fringe = [], [], [], [], []
             for o in self._opaque_order():
                 for mat, first, count, tex, mode in o.parts:
+                    part = (o, mat, first, count, tex)
                     if mat.alpha < 1.0:
-                        glass.append((o, mat, first, count, tex))
-                        continue
-                    if mode == "blend" and mat.soft:
-                        soft.append((o, mat, first, count, tex))
-                        continue
-                    if mode != "opaque":
-                        cut.append((o, mat, first, count, tex))
+                        glass.append(part)
+                    elif mode == "blend" and mat.soft:
+                        soft.append(part)
+                    elif mode != "opaque":
+                        cut.append(part)
                         if mode == "blend":
-                            fringe.append((o, mat, first, count, tex))
-                        continue
-                    if mat.cull:
-                        ctx.enable(ctx.CULL_FACE)
+                            fringe.append(part)
                     else:
-                        ctx.disable(ctx.CULL_FACE)
-                    if skin is not None and skin.handles(o, first):
-                        skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE, tex,
-                                  self._wr if o.face_vbo is not None else None)
-                        continue
-                    self._draw_part(gl, ctx, o, mat, first, count, tex, _OPAQUE)
+                        opaque.append(part)
+            # cut-outs and the opaque core of blended parts (hair, lashes): their depth first
+            # (a texture look-up each; before the opaque parts, whose pixels under the hair then
+            # fail the depth test unshaded), then shaded once per pixel where they are in
+            # front — stacked hair cards would otherwise be lit layer after layer
+            fbo.color_mask = False, False, False, False
+            for o, mat, first, count, tex in cut:
+                self._draw_part(gl, ctx, o, mat, first, count, tex, _CUT, depth_only=True)
+            fbo.color_mask = True, True, True, True
+            for o, mat, first, count, tex in opaque:
+                if mat.cull:
+                    ctx.enable(ctx.CULL_FACE)
+                else:
+                    ctx.disable(ctx.CULL_FACE)
+                if skin is not None and skin.handles(o, first):
+                    skin.draw(ctx, o, first, mat, cam.projection_matrix, BACKFACE, tex,
+                              self._wr if o.face_vbo is not None else None)
+                    continue
+                self._draw_part(gl, ctx, o, mat, first, count, tex, _OPAQUE)
             ctx.disable(ctx.CULL_FACE)
             if cut:
-                # cut-outs and the opaque core of blended parts (hair, lashes): their depth
-                # first (a texture look-up each), then shaded once per pixel where they are in
-                # front — stacked hair cards would otherwise be lit layer after layer
-                fbo.color_mask = False, False, False, False
-                for o, mat, first, count, tex in cut:
-                    self._draw_part(gl, ctx, o, mat, first, count, tex, _CUT, depth_only=True)
-                fbo.color_mask = True, True, True, True
                 ctx.depth_func = "=="
                 for o, mat, first, count, tex in cut:
                     self._draw_part(gl, ctx, o, mat, first, count, tex, _CUT)
