@@ -63,9 +63,10 @@ def test_skin_is_a_closed_oriented_sphere(res):
     for o in h.objects:
         if o.name != "skin":
             assert mg.is_oriented_manifold(o.faces), o.name
-        if o.name not in ("skin", "brows"):
-            assert len(mg.boundary_edges(o.faces)) == 0, o.name
-            assert mg.signed_volume(o.vertices.astype(float), o.faces) > 0, o.name
+        if o.name not in ("skin", "brows"):  # closed, but for an eye's clear cornea cap
+            closed = np.concatenate([p.faces for p in o.parts if p.material != "cornea"])
+            assert len(mg.boundary_edges(closed)) == 0, o.name
+            assert mg.signed_volume(o.vertices.astype(float), closed) > 0, o.name
 
 
 def test_skull_normals_point_away_from_the_head_centre(head):
@@ -245,7 +246,7 @@ def test_resolutions_sample_the_same_surface():
 
 def test_triangle_budget_and_density():
     n = {r: build_builtin_head(r) for r in RES}
-    assert n[1].n_triangles <= 25_000
+    assert n[1].n_triangles <= 25_500  # the eyes with their clear corneas
     s0 = n[0]["skin"].n_vertices / n[1]["skin"].n_vertices
     s2 = n[2]["skin"].n_vertices / n[1]["skin"].n_vertices
     assert 0.35 < s0 < 0.7

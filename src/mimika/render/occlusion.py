@@ -106,3 +106,44 @@ def bake(key: tuple, ctx: Any, objects: list, draw: Any, centre: np.ndarray, rad
     while len(_CACHE) > 8:
         _CACHE.popitem(last=False)
     return out
+
+
+#: the eye openings' outlines: the landmarks round each eye (the subject's right, left)
+EYE_OUTLINES = (tuple(range(36, 42)), tuple(range(42, 48)))
+
+
+#: the direction (world, the head at rest) of the light that the lids shade: above the front
+#: (a portrait key light), so the eyeball is darker under the upper lid than above the lower
+LID_LIGHT = (0.0, 0.5, 0.866)
+
+
+def opening_light(points: np.ndarray, normals: np.ndarray, outline: np.ndarray) -> np.ndarray:
+    """Per point (N, 3) facing ``normals`` (N, 3), unit: the light of a cosine lobe about them
+    seen through the polygon ``outline`` (K, 3) (Lambert's form factor of a polygon), over its
+    maximum among the points — 1 where the opening is most in view, toward 0 under its rims."""
+    a = outline[None, :, :] - points[:, None, :]
+    a /= np.linalg.norm(a, axis=2, keepdims=True)
+    b = np.roll(a, -1, axis=1)
+    g = np.cross(a, b)
+    gn = np.maximum(np.linalg.norm(g, axis=2), 1e-12)
+    theta = np.arctan2(gn, np.einsum("nkc,nkc->nk", a, b))
+    f = np.abs(np.einsum("nk,nkc,nc->n", theta / gn, g, normals)) / (2.0 * math.pi)
+    return (f / max(float(f.max()), 1e-9)).astype(np.float32)
+
+
+def eye_occlusion(landmarks: np.ndarray, objects: list) -> dict[str, np.ndarray]:
+    """The occlusion of each eye object (category ``eyes``; the renderer's GPU objects, their
+    buffers holding the rest pose) by the lids: the light from :data:`LID_LIGHT` through the
+    eye opening nearest to it (:func:`opening_light`, the outline from ``landmarks`` (68, 3))
+    — smooth where a bake from a few dozen directions, few of them through the opening, is
+    blotchy."""
+    outlines = [np.asarray(landmarks, np.float64)[list(ids)] for ids in EYE_OUTLINES]
+    out = {}
+    for o in objects:
+        if o.category != "eyes":
+            continue
+        p = o.interleaved[:, :3].astype(np.float64)
+        near = min(outlines, key=lambda q: float(np.linalg.norm(q.mean(0) - p.mean(0))))
+        # light bounced off the lids and lashes reaches the corners too
+        out[o.name] = 0.3 + 0.7 * opening_light(p, np.broadcast_to(LID_LIGHT, p.shape), near)
+    return out

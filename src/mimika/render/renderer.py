@@ -73,7 +73,8 @@ class Material:
     #: a blended part drawn with its texture's alpha throughout (fine hairs lying on the
     #: skin: brows, lashes), not as an opaque core with a soft fringe (hair)
     soft: bool = False
-    model: str = "standard"  #: shading model: standard, or hair (Kajiya-Kay strands)
+    #: shading model: standard, hair (Kajiya-Kay strands), eye, iris, cornea (:data:`MODEL_DEFINES`)
+    model: str = "standard"
 
 
 @functools.cache
@@ -893,6 +894,7 @@ class Renderer:
             ao = occlusion.bake(key, ctx, self._objects,
                                 lambda view, proj: self._draw_depth(gl, view, proj),
                                 centre, 1.2 * height, gl["extent"])
+            ao = {**ao, **occlusion.eye_occlusion(self.head.landmark_points(), self._objects)}
             for o in self._objects:
                 o.interleaved[:, 6] = ao[o.name]
         for o in self._objects:

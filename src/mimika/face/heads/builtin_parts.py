@@ -19,7 +19,7 @@ def eyeball(side: int, res: int) -> MeshObject:
                           np.array(ey["centre"], float) * [side, 1, 1], ey["radius"],
                           pupil_radius=ey["pupil_radius"], iris_radius=ey["iris_radius"],
                           iris_depth=ey["iris_depth"], rings=rings,
-                          n_lon=max(12, round(ey["n_lon"] * sc)))
+                          n_lon=max(12, round(ey["n_lon"] * sc)), cornea=ey["cornea"])
 
 
 def teeth(which: str, res: int) -> MeshObject:

@@ -9,7 +9,9 @@
 // Compiled in variants (llvmpipe pays for both sides of a branch on a uniform): TEXTURED for
 // parts with a texture, HAIR for the strand shading model, DEPTH_ONLY for the depth pre-pass
 // of cut-out parts (coverage only; they are then shaded once where the pre-pass left them),
-// SHADOWS for the key light's shadow map.
+// SHADOWS for the key light's shadow map, EYE, IRIS and CORNEA for the eye (eye.glsl: the wet
+// reflection of the studio, the lids' shade, the iris under the cornea), DETAIL for a normal
+// and roughness map (detail.glsl).
 in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -41,6 +43,9 @@ uniform float u_tint;       // 1 for skin-like materials (take u_mucosa inside t
 
 #include "lights.glsl"
 #include "tone.glsl"
+#if defined(EYE) || defined(IRIS) || defined(CORNEA)
+#include "eye.glsl"
+#endif
 
 out vec4 f_color;
 
@@ -93,7 +98,11 @@ void main() {
     vec3 v = normalize(-v_pos);
 #ifdef TEXTURED
     {
+#ifdef IRIS
+        vec4 t = texture(u_tex, iris_uv(v_uv, v_pos, v));
+#else
         vec4 t = texture(u_tex, v_uv);
+#endif
         base = srgb_decode(t.rgb);
         a = t.a;
         if (u_alpha_mode == 0) gloss = a;  // opaque parts: alpha is a gloss map
@@ -145,6 +154,8 @@ void main() {
         sk += hair_specular(n, v, u_key_dir, t) * defined;
         sf += hair_specular(n, v, u_fill_dir, t) * defined;
     }
+#elif defined(EYE) || defined(CORNEA)
+    vec3 sk = vec3(0.0), sf = vec3(0.0);  // the wet reflection below instead
 #else
     vec3 sk = vec3(specular(n, v, u_key_dir));
     vec3 sf = vec3(specular(n, v, u_fill_dir));
@@ -154,11 +165,21 @@ void main() {
 #ifdef SHADOWS
     kv = key_visibility(v_shadow);
 #endif
+#if defined(EYE) || defined(IRIS) || defined(CORNEA)
+    float lid = lid_shade();
+    kv *= lid;
+#endif
+#if defined(IRIS) && defined(TEXTURED)
+    kv *= iris_key();
+#endif
     // key and fill: diffuse + specular; rim: diffuse only (it lights silhouettes)
     vec3 c = u_key_col * kv * (diffuse(n, u_key_dir) * u_alpha + gloss * sk)
            + u_fill_col * sqrt(ao) * (diffuse(n, u_fill_dir) * u_alpha + gloss * sf)
            + u_rim_col * ao * diffuse(n, u_rim_dir) * u_alpha;
     vec3 ambient = mix(u_ground, u_sky, 0.5 + 0.5 * n.y) * base * u_alpha * ao;
+#if defined(EYE) || defined(CORNEA)
+    c += gloss * (0.25 + 0.75 * lid) * wet_reflection(n, v);
+#endif
     // inside the mouth what light there is has bounced off its red walls
     c = (c + ambient) * facing * v_occ.y * mix(vec3(1.0), vec3(1.0, 0.86, 0.8), 1.0 - v_occ.y);
     if (u_alpha_mode >= 2) {  // premultiplied; a fringe's core (a >= 0.5) adds nothing

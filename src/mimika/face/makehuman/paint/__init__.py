@@ -65,7 +65,9 @@ def _part_texture(mat: str, piece: Piece, ch: Character) -> tuple[Texture | None
         if mat == "iris":
             return _texture("iris", piece, {"eyes": ch.eyes, "seed": seed},
                             lambda: paint_iris(ch.eyes, seed)), "opaque"
-        return _texture("sclera", piece, {"seed": seed}, lambda: paint_sclera(seed)), "opaque"
+        nasal = {"eye_L": -1.0, "eye_R": 1.0}.get(piece.name, 0.0)
+        return _texture("sclera", piece, {"seed": seed, "nasal": nasal},
+                        lambda: paint_sclera(seed, nasal)), "opaque"
     if mat == "hair":
         from mimika.face.makehuman.paint.hair import paint_hair
 

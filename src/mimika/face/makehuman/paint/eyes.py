@@ -1,5 +1,6 @@
 """Eyes: iris (radial fibres, collarette, crypts, dark limbal ring, the character's eye colour)
-and sclera (warm, slightly darker toward the corners, faint vessels). The eyeball's UVs are
+and sclera (warm, slightly darker toward the corners, faint vessels, the caruncle's pink in the
+inner corner). The eyeball's UVs are
 its front projection (:func:`mimika.face.eyeball.eyeball_object`), so both are discs about
 (0.5, 0.5): the iris reaches ``IRIS_UV`` and the pupil ``PUPIL_UV``."""
 
@@ -15,6 +16,11 @@ SIZE = 512
 #: iris and pupil radii in UV (the build's eyeball: iris 0.47 R, pupil 0.22 R; UV = x / 2R)
 IRIS_UV = 0.235
 PUPIL_UV = 0.11
+#: the caruncle (the pink flesh in the inner corner) and the plica beside it: centre on the
+#: nasal side (UV distance from the middle, height), radii (across, up); where the inner eye
+#: corner lies on the presets' eyeballs
+CARUNCLE = {"centre": (0.33, -0.05), "radii": (0.06, 0.075), "plica": 0.25,
+            "colour": "#c07a74"}
 
 
 def _polar(size: int) -> tuple[np.ndarray, np.ndarray]:
@@ -74,8 +80,27 @@ def _sclera_rgb(r: np.ndarray, th: np.ndarray, rng) -> np.ndarray:
     return c
 
 
-def paint_sclera(seed: int) -> np.ndarray:
-    """RGB(A) sclera texture (alpha: gloss 255)."""
+def paint_sclera(seed: int, nasal: float = 0.0) -> np.ndarray:
+    """RGB(A) sclera texture (alpha: gloss 255); ``nasal``: the side of the inner corner
+    along u (-1 for the left eye, whose nose side is toward -x; +1 for the right; 0 none)
+    where the caruncle is painted."""
     rng = np.random.default_rng(seed)
     r, th = _polar(SIZE)
-    return color.rgba8(_sclera_rgb(r, th, rng), np.ones(r.shape, np.float32))
+    c = _sclera_rgb(r, th, rng)
+    if nasal:
+        c = _caruncle(c, r * np.cos(th) * nasal, r * np.sin(th), rng)
+    return color.rgba8(c, np.ones(r.shape, np.float32))
+
+
+def _caruncle(c: np.ndarray, x: np.ndarray, y: np.ndarray, rng) -> np.ndarray:
+    """The caruncle on sclera colours ``c`` at UV offsets ``x`` (toward the nose), ``y``: a
+    pink, finely bumpy mound in the inner corner, and the plica, a pinker fold beside it."""
+    (cx, cy), (rx, ry) = CARUNCLE["centre"], CARUNCLE["radii"]
+    d = np.hypot((x - cx) / rx, (y - cy) / ry)
+    bumps = ndimage.gaussian_filter(rng.random(d.shape).astype(np.float32), 2.0)
+    bumps = (bumps - bumps.mean()) / max(float(bumps.std()), 1e-6)
+    flesh = color.hex_linear(CARUNCLE["colour"])[None, None, :] * (1 + 0.08 * bumps[..., None])
+    w = (1 - smoothstep(0.5, 1.2, d)) * smoothstep(0.0, 0.3, x)
+    plica = np.exp(-((x - CARUNCLE["plica"]) / 0.02) ** 2) * np.exp(-((y - cy) / 0.12) ** 2)
+    c = c * (1 + (np.array([1.0, 0.8, 0.78], np.float32) - 1) * (0.6 * plica)[..., None])
+    return c * (1 - w[..., None]) + flesh * w[..., None]
