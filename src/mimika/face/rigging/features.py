@@ -23,7 +23,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 log = logging.getLogger(__name__)
 
@@ -71,21 +70,17 @@ def sphere_fit(p: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def weld(v: np.ndarray, tol: float = WELD_TOL) -> np.ndarray:
-    """Per vertex, the first vertex at its position (within ``tol`` of the mesh's size): the
-    copies a UV seam (or a normal seam) cuts a glTF mesh into point to one vertex."""
+    """Per vertex, the first vertex at its position (rounded to ``tol`` of the mesh's size):
+    the copies a UV seam (or a normal seam) cuts a glTF mesh into point to one vertex.
+    Linear in the vertices, however many share a position."""
     v = np.asarray(v, float)
     n = len(v)
     if n < 2:
         return np.arange(n)
     r = tol * max(float(np.ptp(v, axis=0).max()), 1e-12)
-    pairs = cKDTree(v).query_pairs(r, output_type="ndarray")
-    if not len(pairs):
-        return np.arange(n)
-    g = sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    _, lab = connected_components(g, directed=False)
-    first = np.full(lab.max() + 1, n, np.int64)
-    np.minimum.at(first, lab, np.arange(n))
-    return first[lab]
+    _, first, inverse = np.unique(np.round((v - v.min(0)) / r).astype(np.int64), axis=0,
+                                  return_index=True, return_inverse=True)
+    return first[inverse.reshape(-1)]
 
 
 def welded(v: np.ndarray, f: np.ndarray, rep: np.ndarray | None = None
