@@ -32,7 +32,7 @@ def heads(tmp: Path) -> list[tuple[str, Path]]:
     """(label, file) of the sample heads."""
     from mimika.face.heads import load_head
     from mimika.face.rigging.export import write_obj
-    from mimika.face.rigging.samples import decimated, remeshed, write_samples
+    from mimika.face.rigging.samples import decimated, ict_game_head, remeshed, write_samples
 
     out = []
     b, _ = load_head("builtin")
@@ -53,7 +53,7 @@ def heads(tmp: Path) -> list[tuple[str, Path]]:
     out.append(("amara, remeshed (OBJ)", write_obj(tmp / "amara_remeshed.obj", v, f)))
     if ict_available():
         out.append(("ICT: face + mouth bag + sockets in one mesh, eyes, teeth (GLB, seams)",
-                    ict_game_head(tmp)))
+                    ict_game_head(tmp)["glb"]))
         v, f = ict_skin()
         v, f = decimated(v, f, 0.4)
         out.append(("ICT skin, decimated to 40 % (OBJ)", write_obj(tmp / "ict_dec.obj", v, f)))
@@ -77,26 +77,6 @@ def ict_skin() -> tuple[np.ndarray, np.ndarray]:
     lo, hi = RANGES["skin"]
     f = d.faces[np.all((d.faces >= lo) & (d.faces < hi), axis=1)] - lo
     return d.vertices[lo:hi].astype(float), f.astype(np.int64)
-
-
-def ict_game_head(tmp: Path) -> Path:
-    """The ICT head the way a game head is made: face, mouth bag and eye sockets one mesh
-    cut at its UV seams, eyeballs and teeth their own meshes (GLB, metres)."""
-    from mimika.face.heads.ict import find_ict_dir
-    from mimika.face.rigging.export import BareMesh, write_bare_glb
-    from mimika.io.obj import read_obj
-
-    m = read_obj(find_ict_dir() / "generic_neutral_mesh.obj")
-    meshes = []
-    for name, lo, hi in (("head", 0, 14062), ("teeth", 17039, 21451), ("eyeL", 21451, 23021),
-                         ("eyeR", 23021, 24591)):
-        keep = np.all((m.faces >= lo) & (m.faces < hi), axis=1)
-        f, fuv = m.faces[keep].astype(np.int64), m.face_uvs[keep].astype(np.int64)
-        pairs, inv = np.unique(np.c_[f.reshape(-1), fuv.reshape(-1)], axis=0, return_inverse=True)
-        uv = m.uvs[pairs[:, 1]]
-        meshes.append(BareMesh(name, m.vertices[pairs[:, 0]] * 0.01,
-                               [(name, inv.reshape(-1, 3))], np.c_[uv[:, 0], 1 - uv[:, 1]]))
-    return write_bare_glb(tmp / "ict_game.glb", meshes)
 
 
 def report(label: str, rows: list[dict], every: bool) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import needs_ict
 from mimika.cli import main
 from mimika.face.heads import load_head
 from mimika.face.heads.gltf_scene import read_gltf
@@ -93,6 +94,21 @@ def test_glb_and_obj_forms_give_one_frame(files, request):
     assert np.allclose(a.rotation, b.rotation, atol=1e-4)  # (a GLB holds float32)
     for k in ("eye_L", "eye_R", "mouth"):
         assert np.linalg.norm(getattr(a.features, k) - getattr(b.features, k)) < 0.05, k
+
+
+@needs_ict
+def test_game_head_mouth_is_the_lip_opening(tmp_path):
+    """The ICT head made like a game head (face, mouth bag and eye sockets one mesh): as a
+    GLB cut at its seams and as an OBJ, the mouth found is the opening between the lips (the
+    ICT landmarks put the lips' inner line 11.3 cm in front), not the bag behind (9.5 cm)."""
+    from mimika.face.rigging.samples import ict_game_head
+
+    f = ict_game_head(tmp_path)
+    a, b = rig_mesh(f["glb"]).frame, rig_mesh(f["obj"]).frame
+    assert np.allclose(a.rotation, b.rotation, atol=1e-4)
+    for fr in (a, b):
+        assert fr.features.mouth[2] > 10.3 and abs(fr.features.mouth[1] + 3.35) < 0.3
+    assert np.linalg.norm(a.features.mouth - b.features.mouth) < 0.05
 
 
 def test_seams_do_not_open(character_files):

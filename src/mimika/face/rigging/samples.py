@@ -16,7 +16,7 @@ from mimika.face.head import Head
 from mimika.face.rigging.export import BareMesh, write_bare_glb, write_obj
 from mimika.face.rigging.features import welded
 
-__all__ = ["decimated", "remeshed", "write_samples"]
+__all__ = ["decimated", "ict_game_head", "remeshed", "write_samples"]
 
 
 def _rotation(yaw_deg: float, pitch_deg: float) -> np.ndarray:
@@ -54,6 +54,33 @@ def write_samples(head: Head, folder: str | Path, stem: str, objects: Sequence[s
     out["obj"] = write_obj(folder / f"{stem}.obj", np.concatenate(vs), np.concatenate(fs),
                            np.concatenate(uvs), np.concatenate(fuvs), groups)
     return out
+
+
+def ict_game_head(folder: str | Path, stem: str = "ict_game") -> dict[str, Path]:
+    """The ICT Face Model's head made the way a game head is (needs ``$MIMIKA_ICT_DIR``):
+    face, mouth bag and eye sockets one mesh, eyeballs and teeth their own — as a GLB (each
+    mesh cut at its UV seams) and an OBJ (one mesh, positions shared), in metres."""
+    from mimika.face.heads.ict import find_ict_dir
+    from mimika.io.obj import read_obj
+
+    m = read_obj(find_ict_dir() / "generic_neutral_mesh.obj")
+    folder = Path(folder)
+    meshes, fs, fuvs, groups = [], [], [], []
+    for name, lo, hi in (("head", 0, 14062), ("teeth", 17039, 21451), ("eyeL", 21451, 23021),
+                         ("eyeR", 23021, 24591)):
+        keep = np.all((m.faces >= lo) & (m.faces < hi), axis=1)
+        f, fuv = m.faces[keep].astype(np.int64), m.face_uvs[keep].astype(np.int64)
+        pairs, inv = np.unique(np.c_[f.reshape(-1), fuv.reshape(-1)], axis=0,
+                               return_inverse=True)
+        uv = m.uvs[pairs[:, 1]]
+        meshes.append(BareMesh(name, m.vertices[pairs[:, 0]] * 0.01,
+                               [(name, inv.reshape(-1, 3))], np.c_[uv[:, 0], 1 - uv[:, 1]]))
+        fs.append(f)
+        fuvs.append(fuv)
+        groups.append((name, len(f)))
+    return {"glb": write_bare_glb(folder / f"{stem}.glb", meshes),
+            "obj": write_obj(folder / f"{stem}.obj", m.vertices * 0.01, np.concatenate(fs),
+                             m.uvs, np.concatenate(fuvs), groups)}
 
 
 def _first(labels: np.ndarray) -> np.ndarray:
