@@ -25,7 +25,6 @@ from mimika.serve.speech import FPS
 LOOKAHEAD = 0.1  #: a frame is sent once this much audio past it has come (s; 0…1)
 HOP = 0.0  #: send at most this often (s of audio; 0: whenever frames are final)
 EXTEND = 0.1  #: an open segment is taken to last at least this long (s): a typical phone
-REACH = 0.75  #: coarticulation reach (s): older segments no longer move a frame
 
 
 class ListenStream:
@@ -33,6 +32,7 @@ class ListenStream:
 
     def __init__(self, sr: int, *, lang: str = "en", fps: float = FPS, hop: float = HOP,
                  lookahead: float = LOOKAHEAD):
+        from mimika.speech.coarticulation import max_reach
         from mimika.speech.streaming import Recogniser
 
         if not limits.MIN_SAMPLE_RATE <= sr <= 96000:
@@ -46,6 +46,7 @@ class ListenStream:
         self.samples = 0  # samples received
         self.last_send = 0.0  # seconds of audio when frames were last sent
         self.sent = 0  # face frames sent
+        self.reach = max_reach()  # older segments no longer move a frame
 
     @property
     def received(self) -> float:
@@ -86,7 +87,7 @@ class ListenStream:
         self.last_send = now
         out = self._frames(self.sent, k_end, end=now if final else None)
         self.sent = k_end
-        keep = self.sent / self.fps - REACH
+        keep = (self.sent - 1) / self.fps - self.reach  # a frame spans ± half a frame
         while len(self.runs) > 1 and self.runs[0][2] / RATE < keep:
             self.runs.pop(0)
         return out

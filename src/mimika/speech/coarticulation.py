@@ -53,6 +53,13 @@ def _class_arrays(classes: Sequence[str]):
     return tgt, dom, ant, car
 
 
+def max_reach() -> float:
+    """Seconds beyond which no segment moves a frame: four time constants of the slowest
+    class (as :func:`coarticulate` cuts them off)."""
+    _, _, ant, car = _class_arrays(list(viseme_table()["classes"]))
+    return 4.0 * float(max(ant.max(), car.max()))
+
+
 def _segment_params(segs: Sequence[Segment]):
     vt = viseme_table()
     co = vt["coarticulation"]
