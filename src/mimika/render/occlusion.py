@@ -108,42 +108,65 @@ def bake(key: tuple, ctx: Any, objects: list, draw: Any, centre: np.ndarray, rad
     return out
 
 
-#: the eye openings' outlines: the landmarks round each eye (the subject's right, left)
-EYE_OUTLINES = (tuple(range(36, 42)), tuple(range(42, 48)))
+
+#: the lids round each eye among the 68 landmarks (the subject's right eye, left eye): upper
+#: and lower lid margins, corner to corner
+EYE_LIDS = (((36, 37, 38, 39), (39, 40, 41, 36)), ((42, 43, 44, 45), (45, 46, 47, 42)))
+#: the lids' shade on the eyeball: how far below the upper lid (radians seen from the eye's
+#: centre) its shadow and the lashes' reach and how dark it is there; the same above the lower
+#: lid and in the corners
+LID_SHADE = {"upper": (0.4, 0.25), "lower": (0.2, 0.75), "corners": (0.35, 0.6)}
 
 
-#: the direction (world, the head at rest) of the light that the lids shade: above the front
-#: (a portrait key light), so the eyeball is darker under the upper lid than above the lower
-LID_LIGHT = (0.0, 0.5, 0.866)
+def _angles(p: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Azimuth and elevation (radians) of points ``p`` (N, 3) seen from ``centre`` (the eye
+    looks toward +z)."""
+    d = np.asarray(p, np.float64) - centre
+    return np.arctan2(d[:, 0], d[:, 2]), np.arctan2(d[:, 1], np.hypot(d[:, 0], d[:, 2]))
 
 
-def opening_light(points: np.ndarray, normals: np.ndarray, outline: np.ndarray) -> np.ndarray:
-    """Per point (N, 3) facing ``normals`` (N, 3), unit: the light of a cosine lobe about them
-    seen through the polygon ``outline`` (K, 3) (Lambert's form factor of a polygon), over its
-    maximum among the points — 1 where the opening is most in view, toward 0 under its rims."""
-    a = outline[None, :, :] - points[:, None, :]
-    a /= np.linalg.norm(a, axis=2, keepdims=True)
-    b = np.roll(a, -1, axis=1)
-    g = np.cross(a, b)
-    gn = np.maximum(np.linalg.norm(g, axis=2), 1e-12)
-    theta = np.arctan2(gn, np.einsum("nkc,nkc->nk", a, b))
-    f = np.abs(np.einsum("nk,nkc,nc->n", theta / gn, g, normals)) / (2.0 * math.pi)
-    return (f / max(float(f.max()), 1e-9)).astype(np.float32)
+def lid_shade(points: np.ndarray, centre: np.ndarray, upper: np.ndarray,
+              lower: np.ndarray) -> np.ndarray:
+    """Per eyeball point (N, 3): the light the lids let reach it, 1 in the open middle, down
+    to :data:`LID_SHADE`'s darkness just under the upper lid, above the lower and in the
+    corners — from the lid margins ``upper`` and ``lower`` (K, 3) seen from the eye's
+    ``centre``."""
+    az, el = _angles(points, centre)
+
+    def margin(pts: np.ndarray) -> np.ndarray:
+        a, e = _angles(pts, centre)
+        order = np.argsort(a)
+        return np.interp(az, a[order], e[order])
+
+    out = np.ones(len(az))
+    for d, key in ((margin(upper) - el, "upper"), (el - margin(lower), "lower")):
+        reach, dark = LID_SHADE[key]
+        out *= dark + (1.0 - dark) * _smooth(d / reach)
+    ends = _angles(np.concatenate([upper, lower]), centre)[0]
+    reach, dark = LID_SHADE["corners"]
+    out *= dark + (1.0 - dark) * _smooth(np.minimum(az - ends.min(), ends.max() - az) / reach)
+    return out.astype(np.float32)
 
 
-def eye_occlusion(landmarks: np.ndarray, objects: list) -> dict[str, np.ndarray]:
-    """The occlusion of each eye object (category ``eyes``; the renderer's GPU objects, their
-    buffers holding the rest pose) by the lids: the light from :data:`LID_LIGHT` through the
-    eye opening nearest to it (:func:`opening_light`, the outline from ``landmarks`` (68, 3))
-    — smooth where a bake from a few dozen directions, few of them through the opening, is
-    blotchy."""
-    outlines = [np.asarray(landmarks, np.float64)[list(ids)] for ids in EYE_OUTLINES]
+def _smooth(x: np.ndarray) -> np.ndarray:
+    t = np.clip(x, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def eye_occlusion(head: Any, objects: list) -> dict[str, np.ndarray]:
+    """The occlusion of each eye object of ``head`` (category ``eyes``; ``objects``: the
+    renderer's GPU objects, their buffers holding the rest pose) by the lids
+    (:func:`lid_shade`, the lids from the landmarks) — smooth where a bake from a few dozen
+    directions, few of them through the eye opening, is blotchy."""
+    lm = np.asarray(head.landmark_points(), np.float64)
     out = {}
     for o in objects:
         if o.category != "eyes":
             continue
         p = o.interleaved[:, :3].astype(np.float64)
-        near = min(outlines, key=lambda q: float(np.linalg.norm(q.mean(0) - p.mean(0))))
-        # light bounced off the lids and lashes reaches the corners too
-        out[o.name] = 0.3 + 0.7 * opening_light(p, np.broadcast_to(LID_LIGHT, p.shape), near)
+        pivot = getattr(head[o.name], "pivot", None)
+        centre = p.mean(0) if pivot is None else np.asarray(pivot, np.float64)
+        upper, lower = min(EYE_LIDS, key=lambda ul: float(np.linalg.norm(
+            lm[list(ul[0])].mean(0) - centre)))
+        out[o.name] = lid_shade(p, centre, lm[list(upper)], lm[list(lower)])
     return out

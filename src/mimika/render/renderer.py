@@ -894,7 +894,7 @@ class Renderer:
             ao = occlusion.bake(key, ctx, self._objects,
                                 lambda view, proj: self._draw_depth(gl, view, proj),
                                 centre, 1.2 * height, gl["extent"])
-            ao = {**ao, **occlusion.eye_occlusion(self.head.landmark_points(), self._objects)}
+            ao = {**ao, **occlusion.eye_occlusion(self.head, self._objects)}
             for o in self._objects:
                 o.interleaved[:, 6] = ao[o.name]
         for o in self._objects:

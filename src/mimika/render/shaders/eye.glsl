@@ -1,29 +1,32 @@
 // The eye (mesh.frag.glsl's EYE: sclera, IRIS, CORNEA variants).
-// * Wet surfaces reflect the studio: each light as a soft window-like box around its direction
+// * Wet surfaces reflect the studio: each light as a soft window-like box about its direction
+//   (tall, reaching down to eye level: seen under lids that hide the top of the iris)
 //   (the key's bright, the fill's a fourteenth as bright per unit of its light), the sky/ground
 //   elsewhere, weighted by Fresnel (tear film, F0 0.025 × u_specular); u_shininess sets how
 //   sharp the reflection is (cornea: sharp, sclera: blurred).
-// * The lids shade the eyeball: the baked occlusion (low under the lids and lashes) darkens
-//   the key light and the reflections there.
+// * The lids shade the eyeball: its occlusion (render/occlusion.py lid_shade: low under the
+//   upper lid and lashes, a little above the lower lid and in the corners) darkens the key
+//   light and the reflections there.
 // * The iris lies under the cornea: seen at an angle the view ray bends toward the eye's axis
 //   (n = 1.376), so the iris point seen lies toward the viewer from the straight ray's (its
 //   texture coordinates shift by the chamber's depth); the cornea focuses the key light onto
 //   the iris's far side and the limbus shades its near side.
 const float CATCH = 45.0;              // a light's box radiance per unit of the light's colour
 const float FILL_CATCH = 0.07;         // the fill's box against the key's
-const vec2 BOX = vec2(0.2, 0.26);      // box half size (tangent of the half angle), across × up
+const vec2 BOX = vec2(0.2, 0.45);      // box half size (tangent of the half angle), across × up
+const float BOX_DROP = 0.25;           // the box's middle below its light (a tall softbox)
 const float IOR = 1.376;               // cornea and aqueous humour
 const float CHAMBER = 0.1;             // cornea to iris, in UV units (UV = eye-local x / 2R)
 const float IRIS_R = 0.228;            // iris radius in UV units, less the limbal ring's edge
 
 float lid_shade() {
-    return 0.2 + 0.8 * smoothstep(0.55, 0.93, mix(1.0, v_occ.x, u_ao));
+    return mix(1.0, v_occ.x, u_ao);  // render/occlusion.py lid_shade
 }
 
 float softbox(vec3 r, vec3 l, float soft) {
     float d = dot(r, l);
     vec3 x = normalize(cross(vec3(0.0, 1.0, 0.0), l));
-    vec2 q = vec2(dot(r, x), dot(r, cross(l, x))) / (max(d, 1e-3) * BOX);
+    vec2 q = (vec2(dot(r, x), dot(r, cross(l, x))) / max(d, 1e-3) + vec2(0.0, BOX_DROP)) / BOX;
     q *= q;
     float e = sqrt(sqrt(dot(q, q)));  // a rounded rectangle: |q|_4
     return d > 0.0 ? 1.0 - smoothstep(1.0 - soft, 1.0 + soft, e) : 0.0;
