@@ -268,6 +268,24 @@ def _png(image: np.ndarray, drop_alpha: bool) -> bytes:
     return _derived(image, f"png{int(drop_alpha)}", encode)
 
 
+def _roughness_image(texture: Any) -> np.ndarray:
+    """The glTF metallic-roughness image (RGB8, half the detail map's size) of a texture with
+    a detail map: G the roughness relative to the material's, over 2 (:func:`_detail`'s
+    factor is twice the material's) — the detail map's scale, × 1.3 where the gloss map is 0
+    … 0.8 where it is full; B metallic 0; R the gloss map (mimika's studio viewer reads R and
+    G for its own shading; glTF viewers ignore R)."""
+    n = np.asarray(texture.normal, np.float32)
+    img = np.asarray(texture.image, np.float32)
+    gloss = img[:, :, 3] / 255.0 if img.shape[2] == 4 and img.shape[:2] == n.shape[:2] else \
+        np.ones(n.shape[:2], np.float32)
+    scale = 0.5 + (n[:, :, 3] / 255.0 if n.shape[2] == 4 else 0.5)
+    out = np.zeros((*n.shape[:2], 3), np.float32)
+    out[:, :, 0], out[:, :, 1] = gloss, np.clip(scale * (1.3 - 0.5 * gloss) / 2.0, 0.01, 1.0)
+    h, w = (n.shape[0] // 2) * 2, (n.shape[1] // 2) * 2
+    out = out[:h, :w].reshape(h // 2, 2, w // 2, 2, 3).mean((1, 3))
+    return np.round(out * 255.0).astype(np.uint8)
+
+
 class _Materials:
     """glTF materials (+ images, textures) per (material name, texture) of the parts."""
 
@@ -281,17 +299,29 @@ class _Materials:
         self._textures: dict[bytes, int] = {}
 
     def _texture(self, part: Part) -> int:
-        """The texture of ``part``'s image, one per image (materials sharing an image share
-        its texture: the image is stored once)."""
-        data = _png(part.texture.image, part.material in _SKIN_MATERIALS)
+        """The texture of ``part``'s image."""
+        return self._png_texture(_png(part.texture.image, part.material in _SKIN_MATERIALS),
+                                 part.texture.name or part.material)
+
+    def _png_texture(self, data: bytes, name: str) -> int:
+        """The texture of a PNG, one per image (materials sharing an image share its
+        texture: the image is stored once)."""
         key = hashlib.sha1(data).digest()
         if key not in self._textures:
             view = self.b.add_bytes(data)
-            self.images.append({"bufferView": view, "mimeType": "image/png",
-                                "name": part.texture.name or part.material})
+            self.images.append({"bufferView": view, "mimeType": "image/png", "name": name})
             self.textures.append({"source": len(self.images) - 1, "sampler": 0})
             self._textures[key] = len(self.textures) - 1
         return self._textures[key]
+
+    def _detail(self, part: Part) -> tuple[int, int]:
+        """The normal and metallic-roughness textures of ``part``'s detail map (its
+        texture's ``normal``)."""
+        t = part.texture
+        name = t.name or part.material
+        normal = self._png_texture(_png(t.normal, True), f"{name}_normal")
+        mr = _derived(t.normal, "mr", lambda: _png(_roughness_image(t), False))
+        return normal, self._png_texture(mr, f"{name}_roughness")
 
     @staticmethod
     def textured(part: Part) -> bool:
@@ -317,6 +347,11 @@ class _Materials:
         elif part.texture is not None:
             pbr["baseColorTexture"] = {"index": self._texture(part)}
             pbr["baseColorFactor"] = [1.0, 1.0, 1.0, alpha]
+            if part.texture.normal is not None:
+                normal, mr = self._detail(part)
+                out["normalTexture"] = {"index": normal}
+                pbr["metallicRoughnessTexture"] = {"index": mr}
+                pbr["roughnessFactor"] = min(2.0 * pbr["roughnessFactor"], 1.0)
         if part.alpha_mode == "blend" or alpha < 1.0:
             out["alphaMode"] = "BLEND"
         elif part.alpha_mode == "mask":

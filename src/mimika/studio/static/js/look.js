@@ -26,14 +26,20 @@ uniform float mk_specular; uniform float mk_shininess;
 uniform float mk_glass;      // 1: glass, premultiplied (specular stays where alpha is 0)
 uniform float mk_skin;       // 1: the skin shader's model (news look, skin materials)
 uniform float mk_roughness; uniform float mk_skin_spec;
+// the skin's detail (render/shaders/detail.glsl): its normal map is three.js's own; the gloss
+// map and the roughness scale come from the GLB's metallic-roughness map (io/gltf.py: R gloss,
+// G the roughness scale × (1.3 − 0.5 gloss) / 2)
+float mk_gl = 1.0;
+float mk_rs = 1.0;
 
 float mk_blinn(vec3 n, vec3 v, vec3 l) {
   float ndl = max(dot(n, l), 0.0);
   vec3 h = normalize(l + v);
-  float norm = (mk_shininess + 8.0) / 25.1327;
+  float shin = mk_shininess / (mk_rs * mk_rs);
+  float norm = (shin + 8.0) / 25.1327;
   float x = 1.0 - max(dot(v, h), 0.0);
   float x2 = x * x;
-  return mk_specular * norm * (1.0 + 2.0 * x2 * x2 * x) * pow(max(dot(n, h), 1e-4), mk_shininess) * ndl;
+  return mk_gl * mk_specular * norm * (1.0 + 2.0 * x2 * x2 * x) * pow(max(dot(n, h), 1e-4), shin) * ndl;
 }
 vec3 mk_beckmann(vec3 n, vec3 v, vec3 l, vec3 c) {
   float ndl = dot(n, l);
@@ -41,12 +47,12 @@ vec3 mk_beckmann(vec3 n, vec3 v, vec3 l, vec3 c) {
   vec3 hu = l + v;
   vec3 h = normalize(hu);
   float ndh = max(dot(n, h), 1e-4);
-  float m2 = mk_roughness * mk_roughness;
+  float m2 = mk_roughness * mk_roughness * mk_rs * mk_rs;
   float t2 = (1.0 - ndh * ndh) / (ndh * ndh);
   float d = exp(-t2 / m2) / (3.14159 * m2 * ndh * ndh * ndh * ndh);
   float s = 1.0 - max(dot(h, v), 0.0), s2 = s * s;
   float f = 0.028 + 0.972 * s2 * s2 * s;
-  return c * (mk_skin_spec * d * f * ndl * 4.0 / max(dot(hu, hu), 1e-4));
+  return c * (mk_gl * mk_skin_spec * d * f * ndl * 4.0 / max(dot(hu, hu), 1e-4));
 }
 vec3 mk_shade(vec3 base, vec3 n, vec3 v, float alpha) {
   float facing = gl_FrontFacing ? 1.0 : u_backface;
@@ -221,6 +227,8 @@ export class Look {
       }
       shader.fragmentShader = shader.fragmentShader
         .replace("void main() {", `${this.pars}\nvoid main() {`)
+        .replace("#include <roughnessmap_fragment>", "#include <roughnessmap_fragment>\n#ifdef USE_ROUGHNESSMAP\n"
+          + "  mk_gl = texelRoughness.r; mk_rs = 2.0 * texelRoughness.g / (1.3 - 0.5 * texelRoughness.r);\n#endif")
         .replace("#include <lights_fragment_begin>", "")
         .replace("#include <lights_fragment_maps>", "")
         .replace("#include <lights_fragment_end>", "")
