@@ -22,7 +22,7 @@ from mimika.face.makehuman.skeleton import Skeleton
 log = logging.getLogger(__name__)
 
 #: bump when build.py changes what it produces
-VERSION = 17
+VERSION = 18
 
 
 def cache_dir() -> Path:

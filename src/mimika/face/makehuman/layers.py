@@ -92,13 +92,17 @@ def _island_of_vertex(tris: np.ndarray, lab: np.ndarray, n: int) -> sp.csr_matri
 
 def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
                   margin: float = 0.02, zone: float = 0.4, rounds: int = 6,
-                  spread: int = 3) -> np.ndarray:
+                  spread: int = 3, stack: float = 0.4, width: float = 0.1) -> np.ndarray:
     """Moves (N, 3) that lift crossing cloth islands clear of each other.
 
     ``v`` (N, 3) welded positions, ``tris`` (F, 3) into them, ``islands`` (F,) each
     triangle's UV island; lengths in base units (dm): ``margin`` the gap left between
-    layers, ``zone`` how far around a crossing the two islands' order is judged. ``spread``
-    rings of neighbours follow a lifted vertex, fading out.
+    layers, ``zone`` how far around a crossing the two islands' order is judged — once per
+    pair and on ``v``, before any move, so a lift cannot turn an order round (lifting a
+    shirt through a jacket made the shirt the upper layer, then lifted it further). A lifted
+    vertex carries the other layers lying up to ``stack`` above it (within ``width`` of its
+    lift's line) with it, so lifting a shirt under a collar lifts the jacket over the shirt
+    too. ``spread`` rings of neighbours follow a lifted vertex, fading out.
     """
     v = np.asarray(v, np.float64)
     move = np.zeros_like(v)
@@ -115,11 +119,12 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
             break
         lift = np.zeros(n)
         direction = np.zeros((n, 3))
-        for a, b in {(int(x), int(y)) for x, y in zip(li[cross], lj[cross], strict=True)}:
+        for a, b in {(int(min(x, y)), int(max(x, y)))
+                     for x, y in zip(li[cross], lj[cross], strict=True)}:
             pair = cross & (((li == a) & (lj == b)) | ((li == b) & (lj == a)))
             mid = cur[tris[np.r_[i[pair], j[pair]]]].reshape(-1, 3)
             if (a, b) not in order:
-                order[(a, b)] = _upper(cur, tris, islands, member, a, b, mid, zone)
+                order[(a, b)] = _upper(v, tris, islands, member, a, b, mid, zone)
             up = order[(a, b)]
             lo = b if up == a else a
             # the upper island's vertices near the crossing, measured against the lower one
@@ -129,7 +134,9 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
                 continue
             h, fn, over = height_above(cur[ids], cur, tris[islands == lo])
             need = over & (h < margin) & (h > -zone / 2)
-            amount = np.where(need, margin - h, 0.0)
+            ids, fn, amount = ids[need], fn[need], (margin - h)[need]
+            below = np.asarray(member[:, lo].todense()).ravel() > 0
+            ids, fn, amount = _carried(cur, ids, fn, amount, below, stack, width)
             better = amount > lift[ids]
             sel = ids[better]
             lift[sel] = amount[better]
@@ -140,26 +147,59 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
     return move
 
 
+def _carried(v: np.ndarray, ids: np.ndarray, fn: np.ndarray, amount: np.ndarray,
+             skip: np.ndarray, stack: float, width: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lifted vertices ``ids`` (directions ``fn``, ``amount``) and, lifted as much, every
+    other vertex (not ``skip``) lying up to ``stack`` above one of them within ``width`` of
+    its lift's line: the layers over a lifted panel."""
+    if not len(ids):
+        return ids, fn, amount
+    cand = np.flatnonzero(~skip)
+    cand = cand[~np.isin(cand, ids)]
+    if not len(cand):
+        return ids, fn, amount
+    kd = cKDTree(v[cand])
+    extra_i, extra_f, extra_a = [ids], [fn], [amount]
+    for k, near in enumerate(kd.query_ball_point(v[ids], float(np.hypot(stack, width)))):
+        if not near:
+            continue
+        c = cand[near]
+        d = v[c] - v[ids[k]]
+        up = d @ fn[k]
+        side = np.linalg.norm(d - up[:, None] * fn[k], axis=1)
+        c = c[(up > 0) & (up < stack) & (side < width)]
+        extra_i.append(c)
+        extra_f.append(np.repeat(fn[k][None], len(c), 0))
+        extra_a.append(np.full(len(c), amount[k]))
+    return np.concatenate(extra_i), np.concatenate(extra_f), np.concatenate(extra_a)
+
+
 def lift_over(v: np.ndarray, tris: np.ndarray, body_v: np.ndarray, body_t: np.ndarray, *,
-              margin: float = 0.05, depth: float = 0.3, reach: float = 0.1,
-              fade: float = 0.2) -> np.ndarray:
+              margin: float = 0.05, depth: float = 0.3, stack: float = 0.4,
+              reach: float = 0.1, fade: float = 0.2) -> np.ndarray:
     """Moves (N, 3) that lift a garment (welded ``v``, ``tris``) off the body (``body_v``,
     ``body_t``) where it sinks into it or lies within ``margin`` of it, so that it rests
-    ``margin`` above it. The lift is a field over space, not per vertex: every cloth vertex
-    within ``reach`` of a sunk one rises as much, fading out over ``fade`` beyond — so the
-    layers of a collar or a lapel rise together and keep their order. Vertices deeper than
-    ``depth`` are left alone (they lie past another part of the body, not under it)."""
+    ``margin`` above it. The lift is a field over the body's surface, not per vertex: every
+    cloth vertex up to ``stack`` above the body whose foot point on it lies within ``reach``
+    of a sunk vertex's rises as much along the body's normal, fading out over ``fade``
+    beyond — so every layer stacked over that spot (shirt, jacket, collar, lapel) rises
+    together and keeps its order and spacing. Vertices deeper than ``depth`` are left alone
+    (they lie past another part of the body, not under it)."""
     v = np.asarray(v, np.float64)
     h, fn, over = height_above(v, np.asarray(body_v, np.float64), body_t)
     need = np.flatnonzero(over & (h < margin) & (h > -depth))
     if not len(need):
         return np.zeros_like(v)
+    foot = v - h[:, None] * fn
     lift = margin - h[need]
     amount = np.zeros(len(v))
-    kd = cKDTree(v[need])
-    for i, near in enumerate(kd.query_ball_point(v, reach + fade)):
+    stacked = np.flatnonzero((h < stack) & (h > -depth))
+    kd = cKDTree(foot[need])
+    for i, near in zip(stacked, kd.query_ball_point(foot[stacked], reach + fade),
+                       strict=True):
         if near:
-            d = np.linalg.norm(v[need[near]] - v[i], axis=1)
+            d = np.linalg.norm(foot[need[near]] - foot[i], axis=1)
             w = np.clip((reach + fade - d) / fade, 0.0, 1.0)
             amount[i] = float(np.max(lift[near] * w))
     return amount[:, None] * fn
