@@ -52,12 +52,13 @@ SYMBOL = {"sil": "_", "bilabial": "p", "labiodental": "f", "dental": "T", "alveo
 
 
 @functools.cache
-def _filterbank(sr: int, nfft: int) -> np.ndarray:
-    """Triangular mel filters, shape (nfft // 2 + 1, N_MELS); bands above Nyquist are 0."""
+def _filterbank(sr: int, nfft: int, warp: float = 1.0) -> np.ndarray:
+    """Triangular mel filters, shape (nfft // 2 + 1, N_MELS); bands above Nyquist are 0.
+    ``warp`` scales every band's frequencies (training only: another vocal tract length)."""
     def mel(f: np.ndarray | float) -> np.ndarray:
         return 1127.0 * np.log1p(np.asarray(f) / 700.0)
 
-    edges = 700.0 * np.expm1(np.linspace(mel(F_LO), mel(F_HI), N_MELS + 2) / 1127.0)
+    edges = warp * 700.0 * np.expm1(np.linspace(mel(F_LO), mel(F_HI), N_MELS + 2) / 1127.0)
     f = np.arange(nfft // 2 + 1) * sr / nfft
     lo, mid, hi = edges[:-2, None], edges[1:-1, None], edges[2:, None]
     w = np.maximum(0.0, np.minimum((f - lo) / (mid - lo), (hi - f) / (hi - mid)))
@@ -72,7 +73,7 @@ class Features:
     the log energy.
     """
 
-    def __init__(self, sr: int):
+    def __init__(self, sr: int, *, warp: float = 1.0):
         if not 4000 <= sr <= 192000:
             raise ParameterError(f"sample rate {sr} Hz must be within 4000…192000 Hz")
         self.sr = int(sr)
@@ -80,7 +81,7 @@ class Features:
         self.nfft = 1 << (self.win - 1).bit_length()
         self.window = np.hamming(self.win).astype(np.float32)
         self.norm = float(np.sum(self.window ** 2))
-        self.fb = _filterbank(self.sr, self.nfft)
+        self.fb = _filterbank(self.sr, self.nfft, warp)
         self.pad = self.win  # leading silence so frame 0's window starts inside the buffer
         self.buf = np.zeros(self.pad, np.float32)  # pre-emphasised samples from buf_start
         self.buf_start = -self.pad  # stream sample index of buf[0]
