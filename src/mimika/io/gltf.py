@@ -383,6 +383,30 @@ def with_textures(doc: dict, mats: _Materials) -> None:
 Attributes = Mapping[str, Mapping[str, np.ndarray]]
 
 
+def _tangents(v: np.ndarray, n: np.ndarray, uv: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """glTF tangents (N, 4) of a mesh with a normal map: per vertex the direction of growing u
+    made orthogonal to the normal ``n``, and in w the handedness that makes cross(n, tangent) ·
+    w run up the image (growing v, mimika's; glTF's t grows down) as the normal map's +y."""
+    p, t = np.asarray(v, np.float64)[faces], np.asarray(uv, np.float64)[faces]
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    d1, d2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    det = np.where(np.abs(det) < 1e-12, 1e-12, det)[:, None]
+    du = (e1 * d2[:, 1:] - e2 * d1[:, 1:]) / det
+    dv = (e2 * d1[:, :1] - e1 * d2[:, :1]) / det
+    tu, tv = np.zeros_like(np.asarray(v, np.float64)), np.zeros_like(np.asarray(v, np.float64))
+    np.add.at(tu, faces.ravel(), np.repeat(du, 3, axis=0))
+    np.add.at(tv, faces.ravel(), np.repeat(dv, 3, axis=0))
+    n = np.asarray(n, np.float64)
+    tu -= n * np.einsum("ij,ij->i", n, tu)[:, None]
+    length = np.linalg.norm(tu, axis=1)
+    other = np.cross(n, np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    tu = np.where(length[:, None] > 1e-12, tu / np.maximum(length, 1e-12)[:, None],
+                  other / np.linalg.norm(other, axis=1, keepdims=True))
+    w = np.where(np.einsum("ij,ij->i", np.cross(n, tu), tv) < 0.0, -1.0, 1.0)
+    return np.c_[tu, w].astype(np.float32)
+
+
 def _object_attributes(b: _Builder, o: Any, uvs: bool, extra: Attributes | None = None
                        ) -> tuple[bool, np.ndarray, dict]:
     """(is an eye, its origin, attributes) of a head object: positions (eyes about their
@@ -392,12 +416,16 @@ def _object_attributes(b: _Builder, o: Any, uvs: bool, extra: Attributes | None 
     eye = o.category == "eyes" and o.pivot is not None
     origin = np.asarray(o.pivot, float) if eye else np.zeros(3)
     v = ((o.vertices - origin) * SCALE).astype(np.float32)
+    nrm = _normals(v, o.faces.astype(np.int64))
     attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
-             "NORMAL": b.add(_normals(v, o.faces.astype(np.int64)), "VEC3", _FLOAT,
-                             target=_ARRAY)}
+             "NORMAL": b.add(nrm, "VEC3", _FLOAT, target=_ARRAY)}
     if uvs:
         attrs["TEXCOORD_0"] = _uv_attribute(b, o.uvs if o.uvs is not None else
                                             np.zeros((o.n_vertices, 2)))
+    if uvs and o.uvs is not None and any(p.texture is not None and p.texture.normal is not None
+                                         for p in o.parts):
+        attrs["TANGENT"] = b.add(_tangents(v, nrm, o.uvs, o.faces.astype(np.int64)), "VEC4",
+                                 _FLOAT, target=_ARRAY)
     for key, arr in (extra or {}).get(o.name, {}).items():
         a = np.ascontiguousarray(arr, np.float32).reshape(o.n_vertices, -1)
         attrs[key] = b.add(a, f"VEC{a.shape[1]}", _FLOAT, target=_ARRAY)
