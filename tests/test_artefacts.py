@@ -95,3 +95,35 @@ def test_no_skin_shows_through_clothes_or_between_hair_cards_at_rest(presets, na
     assert c["hair_gap_px"] <= 150
     assert c["zfight_px"] <= 5
     assert c["stretched_tris"] == 0 and c["flipped_tris"] == 0
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("name", ["daniel", "mei", "tomas"])
+def test_hairlines_show_no_light_skin_between_hair(presets, name):
+    """mei's and tomas's hairlines showed light streaks of skin between the strands and cards;
+    the scalp under the hair is now painted toward the hair's colour, so the skin seen in
+    narrow gaps of the hair (in the news shot) is darker than the forehead, not a streak."""
+    from scipy import ndimage
+
+    from mimika.face.makehuman.artefacts import id_layers
+    from mimika.newsreader.pipeline import news_camera
+    from mimika.render import Renderer
+    from mimika.render.skin import SkinParams
+
+    head, _ = presets[name]
+    size = (1280, 720)
+    cam = news_camera(head, "front", 16 / 9)
+    objs = [o for o in head.objects if o.parts]
+    (front,) = id_layers([(o.vertices, o.faces) for o in objs], cam, size)
+    names = [o.name for o in objs]
+    hair = front.obj == names.index("hair")
+    skin = front.obj == names.index("skin")
+    with Renderer(head, size, samples=4, skin_shader=SkinParams(), lighting="news") as r:
+        img = r.render(None, camera=cam).astype(float)
+    lum = img @ np.array([0.3, 0.59, 0.11])
+    gaps = ndimage.binary_closing(hair, iterations=4) & skin
+    lm = cam.project(head.landmark_points(), size)
+    fy, fx = int(lm[19:25, 1].mean() - 0.25 * (lm[8, 1] - lm[27, 1])), int(lm[27, 0])
+    forehead = np.median(lum[fy - 3:fy + 4, fx - 3:fx + 4])
+    light = gaps & (lum > 0.85 * forehead)
+    assert light.sum() <= 25, f"{light.sum()} light skin pixels between hair"

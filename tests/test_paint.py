@@ -244,10 +244,28 @@ def test_hair_has_strands_with_soft_transparent_ends(daniel):
     at = rasterize(hair.uvs, tris, img.shape[1::-1])
     a = img.reshape(-1, 4)[at.texels, 3] / 255.0
     assert (a > 0.95).mean() > 0.4  # a body of hair
-    assert (a < 0.05).mean() > 0.02  # strand ends and gaps, not a shell
+    assert (a < 0.05).mean() > 0.01  # strand ends (tapered to points), not a shell
     assert ((a > 0.05) & (a < 0.95)).mean() > 0.02  # soft, not cut
     lum = img.reshape(-1, 4)[at.texels, :3].mean(1)
     assert lum[a > 0.95].std() > 4  # strand-to-strand variation
+
+
+@needs_anny
+def test_scalp_under_the_hair_takes_the_hairs_colour(daniel):
+    """Skin seen between strand tips reads as hair: the scalp under the hair is painted much
+    darker than the forehead, toward the hair's colour."""
+    from mimika.face.makehuman.paint.skin import _scalp_cover, paint_head, skin_layout
+
+    c, pieces = daniel
+    sk = pieces["skin"]
+    _, uvs = skin_layout(sk)
+    img = paint_head(sk, c)
+    cover = _scalp_cover(sk, c, sk.vertices.astype(float) * 10.0)
+    col = _texel(img, uvs)[:, :3]
+    under, bare = col[cover > 0.9].mean(0), col[cover < 0.02].mean(0)
+    hair = np.array([int(c.hair_color[i:i + 2], 16) for i in (1, 3, 5)], float)
+    assert under.mean() < 0.9 * bare.mean()
+    assert np.linalg.norm(under - hair) < np.linalg.norm(under - bare)
 
 
 @needs_anny

@@ -53,6 +53,44 @@ class _Table:
         i = i.astype(np.int64) % self.n
         return self.v[i] * (1 - f) + self.v[(i + 1) % self.n] * f
 
+    def strands(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Strands one unit wide across ``x``: each one's random value and where ``x`` lies
+        in it (0 … 1 from side to side)."""
+        i = np.floor(x)
+        return self.v[i.astype(np.int64) % self.n], (x - i).astype(np.float32)
+
+
+def _locks(table: _Table, x: np.ndarray, grown: np.ndarray, soft: np.ndarray
+           ) -> np.ndarray:
+    """Coverage of tapered locks one unit wide across ``x`` whose tips lie where ``grown``
+    (0 at the tip … 1 at full width) rises; ``soft``: a texel's width in those units (the
+    edges are anti-aliased over it)."""
+    r, f = table.strands(x)
+    u = np.clip(grown - 0.6 * r, 0.0, 1.0) / 0.4  # each lock ends at its own length
+    half = 0.5 * np.sqrt(np.clip(u, 0.0, 1.0))
+    return smoothstep(0.0, 1.0, (half - np.abs(f - 0.5)) / np.maximum(soft, 0.05) + 0.5)
+
+
+def _cells(p: np.ndarray, size: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cellular (Worley) noise at points ``p`` (T, 3) cm, cells ``size`` cm: the distances
+    to the nearest and second-nearest feature points (in cells) and a random value per
+    nearest cell."""
+    q = np.asarray(p, np.float64) / size
+    base = np.floor(q).astype(np.int64)
+    rnd = np.random.default_rng(seed).random((4096, 4))
+    d1 = np.full(len(q), np.inf)
+    d2 = np.full(len(q), np.inf)
+    r1 = np.zeros(len(q))
+    for off in np.stack(np.meshgrid(*[[-1, 0, 1]] * 3, indexing="ij"), -1).reshape(-1, 3):
+        c = base + off
+        r = rnd[(c * np.array([73856093, 19349663, 83492791])).sum(1) % 4096]
+        d = np.linalg.norm(c + r[:, :3] - q, axis=1)
+        closer = d < d1
+        d2 = np.where(closer, d1, np.minimum(d2, d))
+        r1 = np.where(closer, r[:, 3], r1)
+        d1 = np.where(closer, d, d1)
+    return d1.astype(np.float32), d2.astype(np.float32), r1.astype(np.float32)
+
 
 def _border_distance(at: Atlas, uv: np.ndarray, tris: np.ndarray, weld, island: np.ndarray
                      ) -> np.ndarray:
@@ -179,64 +217,98 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
         keep = smoothstep(1.0, 2.5, spacing * scale / np.maximum(tsz, 1e-6))
         return 0.5 + (v - 0.5) * keep
 
-    if st.get("curl", 0) > 0:  # curls: contour lines of 3-D noise
-        cs = float(st["curl"])
-        v1 = fbm3(p, cs, seed + 3, octaves=2)
-        v2 = fbm3(p, cs * 0.7, seed + 4, octaves=2)
-        strand = np.exp(-np.sin(np.pi * 4 * v1) ** 2 / 0.08) * 0.6 + \
-            np.exp(-np.sin(np.pi * 4 * v2) ** 2 / 0.08) * 0.4
-        clump = value3(p, cs * 2.5, seed + 5)
-        fibre = value3(p, cs * 0.3, seed + 6, order=1)
-        length = value3(p, cs * 0.5, seed + 7, order=1)
-    else:
-        clump = octave(st["clump_cm"], 11)
-        strand = octave(st["strand_cm"] * 3, 12)
-        fibre = octave(st["strand_cm"], 13)
-        # strand ends: as fine as the texture resolves (~2.5 texels), a little clumped
-        fine = max(st["strand_cm"] * 1.5, 2.5 * float(np.median(tsz)))
-        raw = 0.85 * octave(fine, 14) + 0.15 * octave(st["clump_cm"], 15)
-        length = smoothstep(0.3, 0.7, raw)  # spread the strand ends over the fade
-
-    # alpha: 1 inside; within fade_cm of the border each strand ends at its own length (on
-    # narrow cards and tufts the fade shrinks to keep a body of hair)
+    # fade: how far from the border strands end (narrow cards and tufts keep a body of hair)
     isl = island[tris[at.faces_at(), 0]]
     deepest = np.zeros(isl.max() + 1, np.float32)
     np.maximum.at(deepest, isl, dist)
     fade = np.clip(0.4 * deepest[isl], 0.03, float(st["fade_cm"]))
-    alpha = smoothstep(0.0, 1.0, (dist - (length * 1.2 - 0.1) * fade) / (0.25 * fade))
     edge = smoothstep(0.0, fade, dist)
-    alpha = alpha * (1.0 - (1.0 - edge) * (1.0 - fibre) * 0.7)
-    if st.get("curl", 0) > 0:  # curly tufts sticking out: a soft halo, not flakes
-        alpha = np.where(card, np.minimum(alpha, 0.45) * (0.4 + 0.6 * strand), alpha)
-    else:  # straight strand ends are wisps: translucent until well inside the hair
-        alpha = np.minimum(alpha, 0.3 + 0.7 * smoothstep(0.2, 0.9, edge))
-
-    # colour: clump, strand and fibre tones; darker roots near the scalp; lighter tips
     base = color.hex_linear(character.hair_color)
-    tone = 1.0 + 0.35 * (clump - 0.5) + 0.3 * (strand - 0.5) + 0.25 * (fibre - 0.5)
+    if st.get("curl", 0) > 0:
+        tone, alpha = _coils(p, st, seed, dist, fade, card)
+    else:
+        clump = octave(st["clump_cm"], 11)
+        strand = octave(st["strand_cm"] * 3, 12)
+        # the finest strands the texture resolves: lines with darker gaps; away from the
+        # pole, where strands diverge, ever finer octaves take over (strands stay as fine)
+        level = np.log2(np.maximum(scale, 1.0))
+        fibre = sum(np.clip(1.0 - np.abs(level - k), 0.0, 1.0) * (octave(
+            _fine_cm(st, tsz) / 2 ** k, 13 + 4 * k) - 0.5) for k in range(3)) + 0.5
+        gap = smoothstep(0.3, 0.05, fibre)
+        tone = (1.0 + 0.12 * (clump - 0.5) + 0.15 * (strand - 0.5) + 0.3 * (fibre - 0.5)) * \
+            (1.0 - 0.3 * gap) * (1.0 + 0.06 * fbm3(p, 1.2, seed + 9, octaves=2))
+        # strand ends: tapered locks a few texels wide, each ending at its own length,
+        # two rows offset by half a lock so the hair is whole where the locks are grown
+        lock_cm = max(0.07, 3.0 * float(np.median(tsz)))
+        grown = np.clip(dist / fade, 0.0, 1.0)
+        soft = tsz / (lock_cm * np.maximum(scale, 0.3))
+        x = qn / (lock_cm * np.maximum(scale, 0.3))
+        tables = [_Table(4096, seed + 14 + k) for k in range(2)]
+        alpha = np.maximum(_locks(tables[0], x, grown, soft), _locks(tables[1], x + 0.5, grown,
+                                                                      soft))
+        alpha = np.where(dist >= fade, 1.0, alpha)
+
+    # colour: darker roots near the scalp, lighter tips
     # at the crown strands converge below the texture's resolution: a whorl of short hairs
     whorl = 1.0 - smoothstep(1.0, 2.5, st["strand_cm"] * 3 * scale / np.maximum(tsz, 1e-6))
-    tone = tone + 0.3 * whorl * (value3(p, 0.09, seed + 8, order=1) - 0.5)
+    if st.get("curl", 0) <= 0:
+        tone = tone + 0.3 * whorl * (value3(p, 0.09, seed + 8, order=1) - 0.5)
     lift = at.at(np.linalg.norm(piece.meta.get("offsets", np.zeros_like(pos)), axis=1) * CM)
     root = 1.0 - smoothstep(0.15, 1.2, lift)
     tone = tone * (1.0 - st["root_dark"] * root) * (1.0 + 0.12 * (1.0 - edge))
-    c = _grey_strands(base[None, :] * tone[:, None], base, strand, fibre)
+    c = _grey_strands(base[None, :] * tone[:, None], base, qn * np.maximum(scale, 1.0) ** 0.5,
+                      seed, _fine_cm(st, tsz))
     return at.image(color.rgba8(c, alpha))
 
 
-def _grey_strands(c, base, strand, fibre) -> np.ndarray:
-    """Greying hair: a share of white strands among darker ones (mean tone kept)."""
+def _fine_cm(st: dict, tsz: np.ndarray) -> float:
+    """The finest strand spacing (cm) the texture resolves (~2.5 texels)."""
+    return max(st["strand_cm"] * 1.5, 2.5 * float(np.median(tsz)))
+
+
+def _coils(p: np.ndarray, st: dict, seed: int, dist: np.ndarray, fade: np.ndarray,
+           card: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Coily hair: coils ``curl`` cm across (cellular noise), lit on top and dark in the
+    crevices between them, fine spiralling strands inside each; on the halo cards and at the
+    hairline coils stand out one by one (alpha by coil, not a uniform fuzz). Returns the
+    tone and alpha per texel."""
+    cs = float(st["curl"])
+    # irregular, rounded coils: cells over warped positions
+    warp = np.stack([fbm3(p, cs * 2.0, seed + 20 + k, octaves=2) for k in range(3)], 1)
+    d1, d2, r = _cells(p + 0.3 * cs * warp, cs, seed + 3)
+    crevice = smoothstep(0.0, 0.3, d2 - d1)  # 0 between coils
+    top = 1.0 - smoothstep(0.15, 0.95, d1)  # 1 at a coil's centre
+    spiral = 0.5 + 0.5 * np.sin(2 * np.pi * (3.0 * d1 + r) + 4.0 * fbm3(p, cs, seed + 4,
+                                                                        octaves=1))
+    fibre = value3(p, cs * 0.25, seed + 6, order=1)
+    tone = (0.6 + 0.55 * top) * (0.65 + 0.35 * crevice) * (0.88 + 0.24 * r) * \
+        (0.85 + 0.3 * spiral) * (0.9 + 0.2 * fibre)
+    # coverage: whole coils, their edges soft; toward a border only the coils' cores remain
+    grown = np.clip(dist / np.maximum(fade, 1e-3), 0.0, 1.0)
+    body = smoothstep(0.0, 0.25, crevice * (0.4 + 0.6 * top) - 0.6 * (1.0 - grown))
+    alpha = np.where(grown >= 1.0, 1.0, body)
+    # halo cards stay translucent (seen edge-on, opaque ones draw dark lines): coils of fuzz
+    alpha = np.where(card, np.minimum(body, 0.45) * (0.5 + 0.5 * spiral) *
+                     smoothstep(0.0, 0.3, grown), alpha)
+    return tone, alpha
+
+
+def _grey_strands(c: np.ndarray, base: np.ndarray, across: np.ndarray, seed: int,
+                  fine_cm: float) -> np.ndarray:
+    """Greying hair: a share of thin white strands among darker ones, one in three of the
+    finest strands (mean tone kept)."""
     s = color.to_srgb8(base).astype(np.float32) / 255.0
     sat = (s.max() - s.min()) / max(float(s.max()), 1e-6)
     grey = float(smoothstep(0.3, 0.15, np.float32(sat)) * smoothstep(0.2, 0.35,
                                                                       np.float32(s.max())))
     if grey <= 0:
         return c
-    white = smoothstep(0.45, 0.65, 0.3 * strand + 0.7 * fibre)
-    lum = float(color.luminance(base))
     share = 0.3  # white strands
+    r, f = _Table(4096, seed + 16).strands(across / np.float32(fine_cm))
+    white = (r < share) * smoothstep(0.35, 0.15, np.abs(f - 0.5))
+    lum = float(color.luminance(base))
     light = np.full(3, min(1.25 * lum, 0.5), np.float32)
-    dark = np.maximum(base - share * light, 0.2 * base) / (1 - share)
+    dark = np.maximum(base - 0.5 * share * light, 0.2 * base) / (1 - 0.5 * share)
     mixed = dark[None, :] * (1 - white[:, None]) + light[None, :] * white[:, None]
     mixed *= (c / np.maximum(base, 1e-6)).mean(1, keepdims=True)
     return c * (1 - grey) + mixed * grey

@@ -77,9 +77,10 @@ def _lid_margin(pos: np.ndarray, tris: np.ndarray, weld: np.ndarray, lm: np.ndar
 
 
 def _scalp_cover(piece: Piece, character: Character, pos: np.ndarray) -> np.ndarray:
-    """Per vertex: how much hair lies over the skin here — 1 under the hair's opaque body,
-    fading to 0 toward its thinned-out border and where the shell lifts off (the hair is
-    fitted from its ``.mhclo`` onto this skin's bind pose)."""
+    """Per vertex: how much hair lies over the skin here — 1 under the hair's body, fading
+    over its thinned-out border (where strand tips let the skin show between them) and where
+    the shell lifts off (the hair is fitted from its ``.mhclo`` onto this skin's bind
+    pose)."""
     from scipy.sparse.csgraph import dijkstra
     from scipy.spatial import cKDTree
 
@@ -100,7 +101,7 @@ def _scalp_cover(piece: Piece, character: Character, pos: np.ndarray) -> np.ndar
     inner = dijkstra(g, directed=False, indices=rim, min_only=True) if len(rim) else \
         np.full(n, 10.0)
     d, i = cKDTree(hp).query(pos)
-    return smoothstep(1.6, 0.8, d) * smoothstep(0.4, 1.5, np.minimum(inner[i], 10.0))
+    return smoothstep(1.2, 0.5, d) * smoothstep(-0.3, 1.2, np.minimum(inner[i], 10.0))
 
 
 class _Face:
@@ -338,8 +339,10 @@ def _paint_head(at, pos, uv0, cav, cover, margin, lm, on_lips, base, hair, ph, s
 
     # brows: skin under them a little darker (hair roots); scalp tinted by the hair
     c = color.mix(c, c * 0.55 + 0.45 * hair, 0.45 * v["brows"])
+    # the scalp under hair: darkened by the roots and the hair's shade, toward the hair's
+    # colour, so skin between strand tips and cards reads as hair, not as light streaks
     scalp = v["cover"]
-    c = color.mix(c, 0.7 * c + 0.12 * hair, 0.9 * scalp)
+    c = color.mix(c, 0.2 * c + 0.8 * hair, scalp)
 
     # beard shadow: stubble dots over a bluish shadow, strength by sex and age
     g_beard = ph["male"] * (0.55 + 0.45 * smoothstep(18.0, 45.0, np.float32(ph["age"])))
