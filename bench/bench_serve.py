@@ -16,6 +16,8 @@ frames and the first audio (warm server), per engine; then N clients speaking at
   before);
 * the same agreement on written sentences of the Piper voice and espeak-ng against their
   own phone timing (voices other than GRID's speaker);
+* the GRID test split degraded as in ``bench_align_real.py`` (noise at 20/10 dB SNR, −20 dB,
+  +12 dB clipped, 0.9×/1.1× speed), offline, against the clean transcript's visemes;
 * another speaker and language: the jaw of the recognised mouth against FACEGOOD's
   animation of its Mandarin takes (``$MIMIKA_FACEGOOD_DIR``).
 
@@ -346,6 +348,39 @@ def facegood_jaw() -> None:
           f"r = {mean['frames']:.2f} (pocketsphinx {mean['sphinx']:.2f})", flush=True)
 
 
+def listen_conditions(items, conditions=("noise20", "noise10", "quiet", "loud", "slow",
+                                          "fast")) -> None:
+    """Offline audio-only lip-sync of degraded GRID test recordings (``bench_align_real``'s
+    conditions) against the transcript-aligned visemes of the clean ones, both engines."""
+    import numpy as np
+
+    from bench_align_real import degrade
+    from mimika.speech import Phone, Utterance
+    from mimika.speech.alignment import recognise
+    from mimika.speech.coarticulation import bilabial_apex_times
+
+    for cond in conditions:
+        rng = np.random.default_rng(0)
+        f = {"slow": 0.9, "fast": 1.1}.get(cond, 1.0)
+        tally = {"frames": Tally(), "sphinx": Tally()}
+        hits = dict.fromkeys(tally, 0)
+        n_b = 0
+        for _, a, sr, truth in items:
+            b, _ = degrade(a, sr, [], cond, rng)
+            ref = Utterance(np.zeros(0, np.float32), 16000,
+                            [Phone(p.symbol, p.start / f, p.end / f, p.stress)
+                             for p in truth.phonemes], lang="en")
+            truth_frames, apex = wire(ref), bilabial_apex_times(ref)
+            n_b += len(apex)
+            for eng, t in tally.items():
+                fr = wire(recognise(b, sr=sr, engine=eng))
+                t.add(fr, truth_frames)
+                hits[eng] += closed(fr, apex)
+        print(f"  {cond:8}: visemes as the aligned transcript {tally['frames'].pct('vis')} "
+              f"(pocketsphinx {tally['sphinx'].pct('vis')}), /p b m/ closed "
+              f"{hits['frames']}/{n_b} ({hits['sphinx']}/{n_b})", flush=True)
+
+
 def listen(clients: int) -> None:
     from mimika.serve.listen import ListenStream
     from mimika.speech.tts import synthesize
@@ -368,7 +403,10 @@ def listen(clients: int) -> None:
               f"frame latency median {med:.0f} ms, p95 {p95:.0f} ms; server CPU {cpu:.3f} s per "
               f"s of audio for all ({cpu / 2:.3f} of 2 cores)", flush=True)
     print("GRID test split (speaker s1, utterances never trained on):")
-    listen_accuracy(grid_items())
+    grid = grid_items()
+    listen_accuracy(grid)
+    print("… degraded (offline; pocketsphinx in brackets):")
+    listen_conditions(grid)
     print("Other voices (written sentences; reference: the synthesiser's phone timing):")
     listen_accuracy(tts_items())
     facegood_jaw()
