@@ -1,5 +1,5 @@
 """Streaming lip-sync recognition: mouth classes from audio, frame by frame, each decision
-final after a fixed look-ahead (:data:`LOOKAHEAD`).
+final after a fixed look-ahead (:attr:`Recogniser.lookahead`: 72.5 ms).
 
 Three stages, each fed as audio arrives and each exactly as it would be on the whole
 recording (so :func:`recognise_classes` offline and :class:`Recogniser` fed in chunks of any
@@ -12,8 +12,10 @@ size give the same classes):
   frames, :data:`~Model.right` future ones) giving log-posteriors of mimika's phoneme classes
   (``speech/data/visemes.json``: bilabial, labiodental, vowel_open …). Its weights
   (``speech/data/mouth_classes.npz``) were trained by ``bench/train_mouth_classes.py`` on
-  GRID speaker s1 (Cooke, Barker, Cunningham & Shao 2006, CC BY 4.0), labels from
-  transcript-aligned phones; the file lists its training utterances and provenance.
+  GRID speaker s1 (Cooke, Barker, Cunningham & Shao 2006, CC BY 4.0; labels from
+  transcript-aligned phones) and on synthetic sentences of the Piper voice en_US-joe-medium
+  (CC0) and espeak-ng (labels from their own timing); the file lists its training
+  utterances and provenance (``Model.meta``).
 * :class:`Decoder` — fixed-lag Viterbi over those posteriors (a switch between classes costs
   ``switch``): frame *t* is decided when frame *t + lag* has been scored, and never revised.
 
