@@ -224,6 +224,41 @@ def test_the_player_page_speaks_and_moves_the_mouth(browser, served):
     page.close()
 
 
+def test_the_player_streams_audio_it_plays_itself_and_moves_the_mouth(browser, served):
+    """head.stream(node): a page's own audio (an AudioBufferSourceNode) goes to ``listen``;
+    the frames that come back move the mouth in time with the (delayed) sound."""
+    from mimika.speech.tts import synthesize
+
+    u = synthesize("Bob bought a big map, and a blue pub.", engine="espeak")
+    pcm = base64.b64encode((np.clip(u.audio, -1, 1) * 32767).astype("<i2").tobytes()).decode()
+    page = browser.new_page()
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto(served)
+    page.wait_for_function("window.mimikaReady === true", timeout=120_000)
+    page.evaluate("""async ([data, sr]) => {
+        const head = window.mimikaHead, ctx = head._audio();
+        const bytes = Uint8Array.from(atob(data), (c) => c.charCodeAt(0));
+        const pcm = new Int16Array(bytes.buffer);
+        const buf = ctx.createBuffer(1, pcm.length, sr);
+        const ch = buf.getChannelData(0);
+        for (let i = 0; i < pcm.length; i++) ch[i] = pcm[i] / 32768;
+        const src = ctx.createBufferSource();
+        src.buffer = buf;
+        const live = await head.stream(src);
+        window.streamed = false;
+        src.onended = () => live.stop();
+        live.done.then(() => { window.streamed = true; });
+        src.start();
+    }""", [pcm, u.sr])
+    page.wait_for_function("window.streamed === true", timeout=60_000)
+    stats = page.evaluate("window.mimikaHead.stats")
+    assert stats["errors"] == [] and stats["maxMouth"] > 0.15
+    assert errors == []
+    page.close()
+
+
 def test_listen_streams_lipsync_from_audio_alone(client):
     """The agent's own audio (a neural voice) in 50 ms chunks: frames cover it on its clock,
     the lips close for most of Bob / bought / big / map / blue / pub, as offline."""

@@ -7,6 +7,7 @@
 //   await head.ready;                 // avatar loaded, connected
 //   await head.speak("Good evening."); // resolves when the speech has been played
 //   head.setMood("happy"); head.emote("surprise", 0.8, 1.5); head.look(0.3, 0); head.interrupt();
+//   const live = await head.stream(audioNode); … live.stop();  // lip-sync for your own audio
 //
 // The avatar is any glTF/GLB/VRM three.js loads (`avatar: URL`, default the server's
 // /head.glb): morph targets named like AUs (mimika's exports: AU12, AU12L …) or ARKit
@@ -22,6 +23,11 @@ const HEAD_BONES = /^(head|Head|mixamorigHead|J_Bip_C_Head)$/;
 const EYE_BONES = { left: /^(LeftEye|eye_L|Eye_L|J_Adj_L_FaceEye|mixamorigLeftEye)$/,
                     right: /^(RightEye|eye_R|Eye_R|J_Adj_R_FaceEye|mixamorigRightEye)$/ };
 const FADE_S = 0.12; // interrupt: back to idle within this
+const CHUNK_S = 0.05; // stream(): seconds of audio per listen message
+// stream(): an AudioWorklet that hands the node's samples (first channel) to the page
+const TAP = `registerProcessor("mimika-tap", class extends AudioWorkletProcessor {
+  process(inputs) { const ch = inputs[0][0]; if (ch) this.port.postMessage(ch.slice(0)); return true; }
+});`;
 // VRoid/VRM faces name their morphs after vowels and blinks: drive them from the viseme
 const VRM_VOWEL = { aa: "Fcl_MTH_A", E: "Fcl_MTH_E", ih: "Fcl_MTH_I", oh: "Fcl_MTH_O",
                     ou: "Fcl_MTH_U", CH: "Fcl_MTH_I", SS: "Fcl_MTH_I", RR: "Fcl_MTH_O" };
@@ -58,7 +64,64 @@ export class MimikaHead {
     if (this.speech) this._endSpeech(true);
     this.ws.send(JSON.stringify({ type: "interrupt" }));
   }
-  /** Lip-sync for audio the page plays itself is not streamed yet: see docs/serve.md. */
+  /** Lip-sync for audio the page has itself (an AudioNode: a media element, a WebRTC
+   *  stream, the agent's TTS): its samples go to the server as `listen` chunks, the face
+   *  follows the frames that come back, and the node is heard through a `delay` (s) so
+   *  that sound and face stay in sync (frames arrive ~0.13 s after their instant).
+   *  Resolves, once capture runs, to {stop(), done}: stop() ends the stream, done resolves
+   *  when its last frame has been shown. */
+  async stream(node, { delay = 0.2 } = {}) {
+    if (this.speech) this._endSpeech(true);
+    const ctx = node.context;
+    this.audio = ctx; // the node's clock is the master
+    if (!ctx.mimikaTap) {
+      ctx.mimikaTap = ctx.audioWorklet.addModule(
+        URL.createObjectURL(new Blob([TAP], { type: "text/javascript" })));
+    }
+    await ctx.mimikaTap;
+    const tap = new AudioWorkletNode(ctx, "mimika-tap");
+    const mute = ctx.createGain();
+    mute.gain.value = 0;
+    node.connect(tap).connect(mute).connect(ctx.destination); // pulled, not heard
+    const late = ctx.createDelay(Math.max(1, delay));
+    late.delayTime.value = delay;
+    node.connect(late).connect(ctx.destination);
+    const id = `stream-${this.nextId++}`, sr = ctx.sampleRate, chunk = Math.round(sr * CHUNK_S);
+    let parts = [], n = 0, open = true;
+    const sp = { id, start: null, frames: [], end: null, sources: [] };
+    const done = new Promise((resolve, reject) => { sp.resolve = resolve; sp.reject = reject; });
+    const send = (final) => {
+      const pcm = new Int16Array(n);
+      let k = 0;
+      for (const p of parts) for (let i = 0; i < p.length; i++) {
+        pcm[k++] = Math.max(-32768, Math.min(32767, Math.round(p[i] * 32768)));
+      }
+      const bytes = new Uint8Array(pcm.buffer);
+      let bin = "";
+      for (let i = 0; i < bytes.length; i += 0x8000) bin += String.fromCharCode(...bytes.subarray(i, i + 0x8000));
+      this.ws.send(JSON.stringify({ type: "listen", id, sr, final, data: btoa(bin) }));
+      parts = []; n = 0;
+    };
+    tap.port.onmessage = (e) => {
+      if (!open) return;
+      // the stream's clock: its sample 0 is heard `delay` s after it was captured
+      if (sp.start === null) sp.start = ctx.currentTime - e.data.length / sr + delay;
+      parts.push(e.data); n += e.data.length;
+      if (n >= chunk) send(false);
+    };
+    this.speech = sp;
+    if (ctx.state === "suspended") ctx.resume();
+    const stop = () => {
+      if (!open) return;
+      open = false;
+      send(true);
+      tap.port.onmessage = null;
+      node.disconnect(tap);
+      tap.disconnect();
+      setTimeout(() => { try { node.disconnect(late); } catch (e) { /* gone */ } }, delay * 1000 + 500);
+    };
+    return { stop, done };
+  }
 
   // -- connection ----------------------------------------------------------------------
   _connect() {
