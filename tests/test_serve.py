@@ -238,7 +238,7 @@ def test_the_player_streams_audio_it_plays_itself_and_moves_the_mouth(browser, s
     page.goto(served)
     page.wait_for_function("window.mimikaReady === true", timeout=120_000)
     page.evaluate("""async ([data, sr]) => {
-        const head = window.mimikaHead, ctx = head._audio();
+        const head = window.mimikaHead, ctx = head.audioContext;
         const bytes = Uint8Array.from(atob(data), (c) => c.charCodeAt(0));
         const pcm = new Int16Array(bytes.buffer);
         const buf = ctx.createBuffer(1, pcm.length, sr);

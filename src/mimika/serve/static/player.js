@@ -64,6 +64,9 @@ export class MimikaHead {
     if (this.speech) this._endSpeech(true);
     this.ws.send(JSON.stringify({ type: "interrupt" }));
   }
+  /** The head's AudioContext (its clock is the master): make the nodes for stream() on it. */
+  get audioContext() { return this._audio(); }
+
   /** Lip-sync for audio the page has itself (an AudioNode: a media element, a WebRTC
    *  stream, the agent's TTS): its samples go to the server as `listen` chunks, the face
    *  follows the frames that come back, and the node is heard through a `delay` (s) so
