@@ -192,18 +192,21 @@ class _GpuObject:
         if len(faces):
             faces = np.concatenate([f for _, f, _ in ranges])
         self.faces = faces
-        # normals: on the welded mesh when the object is split at UV seams
+        # normals: on the welded mesh when the object is split at UV seams; the triangles
+        # summed in an order of their own (by corners), so that a normal does not depend to
+        # the last bit on the order they are drawn in (cropped, split by wrinkle reach)
+        nf = faces[np.lexsort(faces.T[::-1])] if len(faces) else faces
         if obj.weld is not None:
             self.weld_ids, self.weld_inv = np.unique(obj.weld, return_inverse=True)
-            wf = self.weld_inv[faces].astype(np.int32)
+            wf = self.weld_inv[nf].astype(np.int32)
             self.corners = tuple(np.ascontiguousarray(wf[:, k]) for k in range(3))
             self.first_of = np.zeros(len(self.weld_ids), np.int64)
             self.first_of[self.weld_inv[::-1]] = np.arange(obj.n_vertices)[::-1]
             self.incidence = incidence_matrix(wf, len(self.weld_ids))
         else:
             self.weld_inv = None
-            self.corners = tuple(np.ascontiguousarray(faces[:, k]) for k in range(3))
-            self.incidence = incidence_matrix(faces, obj.n_vertices)
+            self.corners = tuple(np.ascontiguousarray(nf[:, k]) for k in range(3))
+            self.incidence = incidence_matrix(nf, obj.n_vertices)
         #: material, first index, index count, texture (or None), alpha mode
         self.parts: list[tuple[Material, int, int, Any, str]] = []
         #: the wrinkle groups (``WR_GROUPS``) of skin-like parts by first index: only those
