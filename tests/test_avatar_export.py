@@ -247,9 +247,11 @@ def test_heads_without_a_file_keep_the_mimika_layout():
 def test_generic_export_stores_a_shared_image_once(tmp_path):
     """A head whose materials share one texture image (the eyes' sclera and iris) stores
     it once in mimika's own layout too."""
+    import copy
+
     from mimika.face.head import Texture
 
-    head, rig = load_head("builtin", resolution=0)
+    head, rig = copy.deepcopy(load_head("builtin", resolution=0))  # the cached head stays as it is
     img = np.full((4, 4, 3), 200, np.uint8)
     img.setflags(write=False)
     for o in head.objects:

