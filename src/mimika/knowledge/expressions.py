@@ -300,7 +300,7 @@ def get_expression(name: str, intensity: float = 1.0, *,
     Unknown names raise :class:`ParameterError` with the closest names.
 
     >>> get_expression("happiness", 0.5)
-    {'AU06': 0.5, 'AU12': 0.5, 'AU25': 0.5}
+    {'AU06': 0.5, 'AU12': 0.5, 'AU25': 0.3}
     """
     lib = library if library is not None else _library_or_builtins()
     return lib.get(name).scaled(intensity)
