@@ -16,10 +16,11 @@ pytest_plugins = ["studio_pages"]
 STUDIO_HEAD = DEFAULT_HEAD
 
 
-def _still(pg) -> np.ndarray:
+def _still(pg, before: str = "") -> np.ndarray:
+    """The viewer's 320×240 still; ``before``: JS run in the same task (no frame between)."""
     from PIL import Image
 
-    shot = pg.evaluate("mimikaStudio.viewer.still(320, 240)")
+    shot = pg.evaluate(f"(() => {{ {before}; return mimikaStudio.viewer.still(320, 240); }})()")
     return np.asarray(Image.open(io.BytesIO(base64.b64decode(shot.split(",", 1)[1])))
                       .convert("RGB")).astype(int)
 
@@ -69,7 +70,7 @@ def test_an_open_mouth_is_dark_inside_and_brows_wrinkle_the_forehead(studio):
     pg.wait_for_function("mimikaStudio.viewer.frame.AU01 === 1")
     assert pg.evaluate("Math.max(...mimikaStudio.viewer.look.wrUniforms.u_wr.value)") > 0.03
     lined = _luma(_still(pg))
-    pg.evaluate("mimikaStudio.viewer.look.wrUniforms.u_wr.value.fill(0)")
-    smooth = _luma(_still(pg))
+    # zeroed and drawn in one task: the idle loop's next frame sets the depths again
+    smooth = _luma(_still(pg, "mimikaStudio.viewer.look.wrUniforms.u_wr.value.fill(0)"))
     diff = np.abs(lined - smooth)
     assert diff.max() > 8 and (diff > 3).sum() > 30
