@@ -75,12 +75,15 @@ def _append(g: Glb, data: bytes, acc: dict | None = None, target: int | None = N
     return len(g.doc["accessors"]) - 1
 
 
-def _world(doc: dict) -> np.ndarray:
-    """Rest world matrices of all nodes (TRS or matrix)."""
-    n = len(doc["nodes"])
-    local = np.stack([_local(nd) for nd in doc["nodes"]])
+def _world(doc: dict, local: np.ndarray | None = None) -> np.ndarray:
+    """World matrices of all nodes from their ``local`` ones (default: the rest TRS or
+    matrix of each node)."""
+    nodes = doc["nodes"]
+    n = len(nodes)
+    if local is None:
+        local = np.stack([_local(nd) for nd in nodes])
     parent = np.full(n, -1)
-    for i, nd in enumerate(doc["nodes"]):
+    for i, nd in enumerate(nodes):
         for c in nd.get("children", []):
             parent[c] = i
     world = np.zeros_like(local)
@@ -253,21 +256,10 @@ def posed(path: Path, frame: int) -> dict[str, np.ndarray]:
         else:
             local_trs.setdefault(node, {})[path_] = out[frame]
     nodes = doc["nodes"]
-    n = len(nodes)
-    local = np.stack([_local(nd, local_trs.get(i, {}).get("translation"),
-                             local_trs.get(i, {}).get("rotation"))
-                      if i in local_trs else _local(nd) for i, nd in enumerate(nodes)])
-    parent = np.full(n, -1)
-    for i, nd in enumerate(nodes):
-        for c in nd.get("children", []):
-            parent[c] = i
-    world = np.zeros_like(local)
-    done = np.zeros(n, bool)
-    while not done.all():
-        for i in range(n):
-            if not done[i] and (parent[i] < 0 or done[parent[i]]):
-                world[i] = local[i] if parent[i] < 0 else world[parent[i]] @ local[i]
-                done[i] = True
+    world = _world(doc, np.stack([_local(nd, local_trs.get(i, {}).get("translation"),
+                                         local_trs.get(i, {}).get("rotation"))
+                                  if i in local_trs else _local(nd)
+                                  for i, nd in enumerate(nodes)]))
     out: dict[str, np.ndarray] = {}
     for i, nd in enumerate(nodes):
         if "mesh" not in nd:
