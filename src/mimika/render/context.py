@@ -23,19 +23,10 @@ _lock = threading.Lock()
 render_lock = threading.RLock()
 
 
-#: llvmpipe's opt-in texture sampling shortcuts (read when the first context is made):
-#: trilinear filtering only near mip level changes and an approximate level of detail —
-#: ~3 % of a character's news frame; textures differ by a few 1/255 here and there
-LLVMPIPE_PERF = "brilinear,rho_approx"
-
-
 def _create_context() -> Any:
     """Make a new standalone OpenGL ≥ 3.3 context on the EGL backend (no display needed)."""
-    import os
-
     import moderngl
 
-    os.environ.setdefault("GALLIVM_PERF", LLVMPIPE_PERF)
     return moderngl.create_standalone_context(backend="egl", require=330)
 
 
