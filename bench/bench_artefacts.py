@@ -72,10 +72,10 @@ def cast() -> list:
 
 
 def load(character):
-    from mimika.face.heads.character import _built, assemble
+    from mimika.face.heads.character import assemble, built_character
     from mimika.face.makehuman.paint import parts_of
 
-    return assemble(_built(character), character, lambda p: parts_of(p, character))
+    return assemble(built_character(character), character, lambda p: parts_of(p, character))
 
 
 def outline(img: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -41,12 +41,12 @@ def camera(head, view: str, size: int):
 
 def render(character, size: int, views: tuple[str, ...] | None = None) -> list[np.ndarray]:
     """Images of ``character`` (a Character) in ``views`` (default: all :data:`VIEWS`)."""
-    from mimika.face.heads.character import _built, assemble
+    from mimika.face.heads.character import assemble, built_character
     from mimika.face.makehuman.paint import parts_of
     from mimika.render import Renderer
     from mimika.render.skin import SkinParams
 
-    head, _ = assemble(_built(character), character, lambda p: parts_of(p, character))
+    head, _ = assemble(built_character(character), character, lambda p: parts_of(p, character))
     with Renderer(head, (size, size), samples=4, skin_shader=SkinParams(),
                   lighting="news") as r:
         return [r.render(None, camera=camera(head, v, size)) for v in views or VIEWS]

@@ -19,8 +19,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from mimika.face.heads import load_head
-from mimika.face.heads.character import assemble
-from mimika.face.makehuman.build import Outfit, build
+from mimika.face.heads.character import assemble, built_character
 from mimika.face.makehuman.character_file import assets, load_character_spec, preset_names
 from mimika.face.makehuman.paint import parts_of
 from mimika.render import Renderer
@@ -71,8 +70,7 @@ def assets_sheet(base: str, size: int) -> np.ndarray:
     tiles = []
 
     def shot(c, view, fill, zoom=1.0, dy=0.0, label=""):
-        b = build(c.phenotype_values(), Outfit(c.hair, c.eyebrows, c.eyelashes, c.clothes))
-        head, _ = assemble(b, c, lambda p: parts_of(p, c))
+        head, _ = assemble(built_character(c), c, lambda p: parts_of(p, c))
         with Renderer(head, (size, size), samples=4) as r:
             cam = _zoom(frame_head(head, view, aspect=1.0, fill=fill), zoom, dy)
             tiles.append(_label(r.render(None, camera=cam), label))

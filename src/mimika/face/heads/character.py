@@ -174,7 +174,7 @@ def _with_ict_style(built: Built) -> Built:
                  built.base_vertices)
 
 
-def _built(character: Character) -> Built:
+def built_character(character: Character) -> Built:
     """The character's geometry, from the cache or built (and cached), teeth seated."""
     path = cache.cache_path(character.geometry_key())
     built = cache.load(path)
@@ -198,7 +198,7 @@ def load_character(spec: str) -> tuple[Head, SkinnedRig]:
     character = load_character_spec(spec)
     key = character.key()
     if key not in _LOADED:
-        built = _built(character)
+        built = built_character(character)
         if len(_LOADED) >= 4:
             _LOADED.pop(next(iter(_LOADED)))
         _LOADED[key] = assemble(built, character,
@@ -209,7 +209,7 @@ def load_character(spec: str) -> tuple[Head, SkinnedRig]:
 def character_rig(spec: str, calibration: Mapping[str, Mapping]) -> SkinnedRig:
     """The (untextured) rig of a character with its AU calibration overridden per AU."""
     character = load_character_spec(spec)
-    return assemble(_built(character), character, calibration=calibration)[1]
+    return assemble(built_character(character), character, calibration=calibration)[1]
 
 
 def base_character() -> Character:
@@ -225,7 +225,7 @@ def character_shapes(spec: str | Character) -> tuple[Head, ShapeSet]:
     """The character's head (untextured) and its faceunits as a shape set (per object, cm):
     what a fit of per-shape fields needs."""
     character = spec if isinstance(spec, Character) else load_character_spec(spec)
-    built = _built(character)
+    built = built_character(character)
     head, _ = assemble(built, character)
     shapes = _shape_set(built, _to_head_frame(built)[0])
     own = [k for k, n in enumerate(shapes.names) if not n.startswith(ICT_STYLE)]
