@@ -33,12 +33,12 @@ def cache_dir() -> Path:
 
 @functools.cache
 def builders_digest() -> str:
-    """A hash of the code and data a character is built by (makehuman's modules and data, the
-    eyeball and normals), so an edited builder never reads a stale character."""
+    """A hash of the code and data a character is built by — the face package (makehuman's
+    builder, the eyeball, the ICT-style shapes generated onto it, their fields and AU table),
+    so an edited builder never reads a stale character."""
     face = Path(__file__).parents[1]
-    root = face / "makehuman"
-    return code_digest([*root.glob("*.py"), *root.glob("data/*.json"), face / "eyeball.py",
-                        face / "meshgen.py"])
+    return code_digest([*face.rglob("*.py"), *face.rglob("data/*.json"),
+                        *face.parent.glob("facs/data/*.json")])
 
 
 def cache_path(key: str) -> Path:
