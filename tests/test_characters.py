@@ -430,3 +430,22 @@ def test_the_character_cache_is_keyed_by_the_builders_code(tmp_path, monkeypatch
     assert sorted(p.name for p in cache.cache_dir().iterdir()) == sorted([path.name, other.name])
     assert cache.load(path) is not None
     cache.builders_digest.cache_clear()
+
+
+def test_caches_drop_the_least_recently_used_entries(tmp_path):
+    """Painted textures and built characters are kept up to a size: the oldest unused go first,
+    a read renews an entry, and the entry just written stays."""
+    import os
+
+    from mimika.cachedir import prune, touch
+
+    files = []
+    for k in range(5):
+        f = tmp_path / f"e{k}.png"
+        f.write_bytes(b"x" * 1000)
+        os.utime(f, (1000 + k, 1000 + k))
+        files.append(f)
+    touch(files[0])  # read just now: the most recently used
+    freed = prune(tmp_path, "*.png", 2500, keep=files[1])
+    assert freed == 3000
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["e0.png", "e1.png"]

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from mimika.cachedir import cache_dir as mimika_cache
-from mimika.cachedir import code_digest
+from mimika.cachedir import code_digest, prune, touch
 from mimika.face.makehuman.anny import ANNY_VERSION
 from mimika.face.makehuman.build import Built, Piece
 from mimika.face.makehuman.skeleton import Skeleton
@@ -25,6 +25,8 @@ log = logging.getLogger(__name__)
 
 #: bump when the file layout changes (a change to the code that builds is caught by its digest)
 VERSION = 19
+#: cached characters kept at most (each 20-50 MB; least recently used go first)
+MAX_BYTES = 2**30
 
 
 def cache_dir() -> Path:
@@ -58,7 +60,8 @@ def _get_csr(z, name: str) -> sp.csr_matrix:
 
 def save(path: Path, built: Built) -> None:
     """Write ``built`` to ``path`` (atomically); the same character's entries from other
-    versions or code are removed (each is tens of MB)."""
+    versions or code are removed (each is tens of MB), and the least recently used characters
+    beyond :data:`MAX_BYTES`."""
     from mimika.io.atomic import atomic_open
 
     d: dict[str, np.ndarray] = {"names": np.array([p.name for p in built.pieces]),
@@ -89,6 +92,7 @@ def save(path: Path, built: Built) -> None:
     for old in path.parent.glob(path.name.split("-v")[0] + "-v*.npz"):
         if old != path:
             old.unlink(missing_ok=True)
+    prune(path.parent, "*.npz", MAX_BYTES, keep=path)
 
 
 def load(path: Path) -> Built | None:
@@ -114,8 +118,10 @@ def load(path: Path) -> Built | None:
                 deltas[name] = dl
                 weights[name] = _get_csr(z, f"{k}.w")
             sk = Skeleton(z["sk.heads"], z["sk.tails"], z["sk.parents"], _get_csr(z, "sk.w"))
-            return Built(pieces, sk, tuple(z["shape_names"].tolist()), deltas, weights,
-                         z["base_vertices"])
+            built = Built(pieces, sk, tuple(z["shape_names"].tolist()), deltas, weights,
+                          z["base_vertices"])
     except (OSError, ValueError, KeyError) as e:
         log.warning("character cache %s unreadable (%s): rebuilding", path, e)
         return None
+    touch(path)
+    return built

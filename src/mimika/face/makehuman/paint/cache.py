@@ -17,13 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from mimika.cachedir import cache_dir as mimika_cache
-from mimika.cachedir import code_digest
+from mimika.cachedir import code_digest, prune, touch
 from mimika.io.atomic import atomic_write
 
 log = logging.getLogger(__name__)
 
 #: bump when any painter changes its output
 PAINT_VERSION = 1
+#: painted textures kept at most (least recently used go first)
+MAX_BYTES = 768 * 2**20
 
 
 def cache_dir() -> Path:
@@ -67,6 +69,7 @@ def cached_texture(kind: str, key: str, paint: Callable[[], np.ndarray]) -> np.n
             with Image.open(path) as im:
                 img = np.asarray(im.convert("RGBA"))
             log.debug("paint: %s from cache", path.name)
+            touch(path)
             return img
         except Exception as e:  # a damaged file is painted again
             log.warning("ignoring unreadable painted texture %s (%s)", path, e)
@@ -78,6 +81,7 @@ def cached_texture(kind: str, key: str, paint: Callable[[], np.ndarray]) -> np.n
         buf = io.BytesIO()
         Image.fromarray(img).save(buf, format="PNG", compress_level=3)
         atomic_write(path, buf.getvalue())
+        prune(path.parent, "*.png", MAX_BYTES, keep=path)
     except OSError as e:
         log.warning("could not cache painted texture %s: %s", path, e)
     return img
