@@ -204,13 +204,19 @@ def served(app):
     th.join(10)
 
 
-def test_the_player_page_speaks_and_moves_the_mouth(browser, served):
+def _player(browser, url: str):
+    """The player page, loaded; and the list its page errors and console errors go to."""
     page = browser.new_page()
-    errors = []
+    errors: list[str] = []
     page.on("pageerror", lambda e: errors.append(str(e)))
     page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.goto(served)
+    page.goto(url)
     page.wait_for_function("window.mimikaReady === true", timeout=120_000)
+    return page, errors
+
+
+def test_the_player_page_speaks_and_moves_the_mouth(browser, served):
+    page, errors = _player(browser, served)
     n_morphs = page.evaluate("window.mimikaHead.meshes.reduce((n, m) => n + "
                              "Object.keys(m.morphTargetDictionary).length, 0)")
     assert n_morphs > 20
@@ -231,12 +237,7 @@ def test_the_player_streams_audio_it_plays_itself_and_moves_the_mouth(browser, s
 
     u = synthesize("Bob bought a big map, and a blue pub.", engine="espeak")
     pcm = base64.b64encode((np.clip(u.audio, -1, 1) * 32767).astype("<i2").tobytes()).decode()
-    page = browser.new_page()
-    errors = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.goto(served)
-    page.wait_for_function("window.mimikaReady === true", timeout=120_000)
+    page, errors = _player(browser, served)
     page.evaluate("""async ([data, sr]) => {
         const head = window.mimikaHead, ctx = head.audioContext;
         const bytes = Uint8Array.from(atob(data), (c) => c.charCodeAt(0));
