@@ -378,8 +378,7 @@ def recognise(audio: np.ndarray, *, sr: int, lang: str = "en", engine: str = "fr
 
         dur = len(a) / sr
         phones = [Phone(p.symbol, p.start, min(p.end, dur), p.stress)
-                  for p in streaming.class_phones(streaming.recognise_classes(a, sr=int(sr)))
-                  if p.start < dur]
+                  for p in streaming.class_phones(streaming.recognise_classes(a, sr=int(sr)))]
         name = "frames"
     return Utterance(a, int(sr), phones, [], [], lang="en" if code.startswith("en") else code,
                      text="", meta={"source": "recognition", "engine": name})

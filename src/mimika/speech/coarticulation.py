@@ -17,6 +17,7 @@ Model (parameters in ``speech/data/visemes.json``, documented in ``docs/speech.m
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from collections.abc import Iterable, Sequence
@@ -37,9 +38,16 @@ def mouth_aus() -> tuple[str, ...]:
     return tuple(viseme_table()["mouth_aus"])
 
 
-def _class_arrays(classes: Sequence[str]):
-    """Per-class targets (C, K) and per-group dominance, anticipation, carry-over (C, G)."""
+#: time constants after which a segment no longer moves a frame (its dominance is cut off)
+REACH_TAUS = 4.0
+
+
+@functools.cache
+def _class_arrays() -> tuple[np.ndarray, ...]:
+    """Per-class targets (C, K) and per-group dominance, anticipation, carry-over (C, G), for
+    the viseme table's classes in order (read-only: built once)."""
     vt = viseme_table()
+    classes = list(vt["classes"])
     aus, groups = vt["mouth_aus"], list(vt["groups"])
     tgt = np.array([[vt["classes"][c]["targets"].get(au, 0.0) for au in aus] for c in classes])
     dom, ant, car = (np.zeros((len(classes), len(groups))) for _ in range(3))
@@ -50,14 +58,16 @@ def _class_arrays(classes: Sequence[str]):
             ant[i, j] = e.get("anticipation_round", e["anticipation"]) if g == "round" \
                 else e["anticipation"]
             car[i, j] = e["carryover"]
+    for a in (tgt, dom, ant, car):
+        a.setflags(write=False)
     return tgt, dom, ant, car
 
 
 def max_reach() -> float:
     """Seconds beyond which no segment moves a frame: four time constants of the slowest
     class (as :func:`coarticulate` cuts them off)."""
-    _, _, ant, car = _class_arrays(list(viseme_table()["classes"]))
-    return 4.0 * float(max(ant.max(), car.max()))
+    _, _, ant, car = _class_arrays()
+    return REACH_TAUS * float(max(ant.max(), car.max()))
 
 
 def _segment_params(segs: Sequence[Segment]):
@@ -65,7 +75,7 @@ def _segment_params(segs: Sequence[Segment]):
     co = vt["coarticulation"]
     classes = list(vt["classes"])
     idx = np.array([classes.index(s.cls) for s in segs])
-    tgt, dom, ant, car = (a[idx] for a in _class_arrays(classes))
+    tgt, dom, ant, car = (a[idx] for a in _class_arrays())
     gain = np.array([co["stress_gain"][str(min(max(s.stress, 0), 2))] for s in segs])
     cols = [vt["mouth_aus"].index(a) for a in co["stress_aus"]]
     vowel = np.array([s.cls.startswith("vowel_") for s in segs])
@@ -91,7 +101,7 @@ def coarticulate(segs: Sequence[Segment], times: np.ndarray) -> np.ndarray:
         return out
     tgt, dom, inv_ant, inv_car, lo, hi = _segment_params(segs)
     rest = vt["coarticulation"]["rest_dominance"]
-    reach = 4.0 / min(float(inv_ant.min()), float(inv_car.min()))
+    reach = REACH_TAUS / min(float(inv_ant.min()), float(inv_car.min()))
     starts = np.array([s.start for s in segs])
     ends = np.array([s.end for s in segs])
     block = 128

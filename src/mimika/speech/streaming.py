@@ -223,14 +223,14 @@ class Recogniser:
     """Audio in chunks of any size → the classes of the frames now final (one per
     1 / :data:`RATE` s, from the stream's start)."""
 
-    def __init__(self, sr: int, *, lag: int | None = None):
+    def __init__(self, sr: int):
         self.model = model()
         dec = self.model.meta["decoder"]
         self.features = Features(sr)
         self.feats = np.zeros((self.model.left, N_MELS + 1), np.float32)  # context rows
         self.started = False
         self.decoder = Decoder(len(self.model.classes),
-                               lag=dec["lag"] if lag is None else lag, switch=dec["switch"],
+                               lag=dec["lag"], switch=dec["switch"],
                                prior_weight=dec["prior_weight"],
                                log_prior=self.model.log_prior,
                                start=self.model.classes.index("sil"))
@@ -274,7 +274,11 @@ def class_phones(classes: list[str], *, start: int = 0) -> list[Phone]:
     return out
 
 
-def recognise_classes(audio: np.ndarray, *, sr: int) -> list[str]:
+def recognise_classes(audio: np.ndarray, *, sr: int, chunk_s: float = 5.0) -> list[str]:
     """The class of every 1 / :data:`RATE` s of a whole recording (as a stream would get
-    them)."""
-    return Recogniser(sr).push(audio, final=True)
+    them), fed in chunks of ``chunk_s`` seconds so memory stays flat for long recordings."""
+    rec, step = Recogniser(sr), max(1, int(chunk_s * sr))
+    out: list[str] = []
+    for i in range(0, max(len(audio), 1), step):
+        out += rec.push(audio[i:i + step], final=i + step >= len(audio))
+    return out
