@@ -24,11 +24,13 @@ is smaller than every such distance. Labels are therefore derived, not annotated
 
 from __future__ import annotations
 
+import functools
 import json
 import logging
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -185,9 +187,16 @@ def expression_vector(aus: Mapping[str, float], channels: Sequence[str]) -> np.n
 
 def prototypes(channels: Sequence[str]) -> np.ndarray:
     """Labelling prototypes of :data:`LABELS` over ``channels``: (len(LABELS), K); row 0 is 0."""
-    protos = json.loads((Path(__file__).parent / "data" / "label_prototypes.json").read_text())
+    protos = _label_prototypes()
     return np.array([np.zeros(len(channels))] + [
-        expression_vector(protos["prototypes"][lab], channels) for lab in LABELS[1:]], np.float32)
+        expression_vector(protos[lab], channels) for lab in LABELS[1:]], np.float32)
+
+
+@functools.cache
+def _label_prototypes() -> dict[str, dict[str, float]]:
+    """``data/label_prototypes.json``'s prototypes (read once)."""
+    text = resources.files("mimika.learn").joinpath("data/label_prototypes.json").read_text()
+    return json.loads(text)["prototypes"]
 
 
 def prototype_labels(values: np.ndarray, channels: Sequence[str], *,

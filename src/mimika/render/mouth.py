@@ -29,7 +29,8 @@ DEPTH_FALLOFF = 1.5
 _UPPER, _LOWER = [61, 62, 63], [67, 66, 65]
 
 
-def _smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
+def smoothstep(e0: float, e1: float, x: np.ndarray) -> np.ndarray:
+    """0 below ``e0``, 1 above ``e1``, a smooth cubic between."""
     t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
 
@@ -60,9 +61,9 @@ class MouthCavity:
             else:
                 zc = np.interp(v[:, 0], contour[order, 0], contour[order, 2])
                 depth = zc - v[:, 2]  # behind the inner-lip contour, cm (the throat ≈ 6)
-                w = (_smoothstep(0.05, 0.45, depth) * (1.0 - _smoothstep(6.0, 7.5, depth))
-                     * (1.0 - _smoothstep(0.8 * half, 1.05 * half, np.abs(v[:, 0] - centre[0])))
-                     * (1.0 - _smoothstep(0.45 * half, 0.75 * half,
+                w = (smoothstep(0.05, 0.45, depth) * (1.0 - smoothstep(6.0, 7.5, depth))
+                     * (1.0 - smoothstep(0.8 * half, 1.05 * half, np.abs(v[:, 0] - centre[0])))
+                     * (1.0 - smoothstep(0.45 * half, 0.75 * half,
                                           np.abs(v[:, 1] - centre[1]))))
             ids = np.flatnonzero(w > 1e-3)
             if len(ids):

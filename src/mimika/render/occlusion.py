@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from mimika.render.camera import look_at
+from mimika.render.mouth import smoothstep
 
 #: baked occlusion per (head id, shown objects): {object name: (N,) float32}
 _CACHE: OrderedDict[tuple, dict[str, np.ndarray]] = OrderedDict()
@@ -141,16 +142,12 @@ def lid_shade(points: np.ndarray, centre: np.ndarray, upper: np.ndarray,
     out = np.ones(len(az))
     for d, key in ((margin(upper) - el, "upper"), (el - margin(lower), "lower")):
         reach, dark = LID_SHADE[key]
-        out *= dark + (1.0 - dark) * _smooth(d / reach)
+        out *= dark + (1.0 - dark) * smoothstep(0.0, 1.0, d / reach)
     ends = _angles(np.concatenate([upper, lower]), centre)[0]
     reach, dark = LID_SHADE["corners"]
-    out *= dark + (1.0 - dark) * _smooth(np.minimum(az - ends.min(), ends.max() - az) / reach)
+    out *= dark + (1.0 - dark) * smoothstep(
+        0.0, 1.0, np.minimum(az - ends.min(), ends.max() - az) / reach)
     return out.astype(np.float32)
-
-
-def _smooth(x: np.ndarray) -> np.ndarray:
-    t = np.clip(x, 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
 
 
 def eye_occlusion(head: Any, objects: list) -> dict[str, np.ndarray]:

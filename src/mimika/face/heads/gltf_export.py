@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -59,7 +59,7 @@ class AvatarSource:
     pieces: dict[str, tuple[int, np.ndarray | None]]
     links: dict[str, list[Bind]]
     bones: dict[str, int | None]
-    stamp: tuple[int, int] = (0, 0)  #: the file's size and mtime when it was read
+    stamp: tuple[int, int] = field(init=False)  #: the file's size and mtime when it was read
 
     def __post_init__(self) -> None:
         self.stamp = self._stamp()

@@ -36,11 +36,14 @@ def cache_dir() -> Path:
 @functools.cache
 def builders_digest() -> str:
     """A hash of the code and data a character is built by — the face package (makehuman's
-    builder, the eyeball, the ICT-style shapes generated onto it, their fields and AU table),
-    so an edited builder never reads a stale character."""
+    builder, the eyeball, the ICT-style shapes generated onto it, their fields and AU table)
+    but the painters, which only the build's UV islands use — so an edited builder never reads
+    a stale character and an edited painter rebuilds none."""
     face = Path(__file__).parents[1]
-    return code_digest([*face.rglob("*.py"), *face.rglob("data/*.json"),
-                        *face.parent.glob("facs/data/*.json")])
+    paint = face / "makehuman" / "paint"  # textures: their own cache and digest
+    files = [f for f in [*face.rglob("*.py"), *face.rglob("data/*.json")]
+             if paint not in f.parents or f.name == "regions.py"]
+    return code_digest([*files, *face.parent.glob("facs/data/*.json")])
 
 
 def cache_path(key: str) -> Path:

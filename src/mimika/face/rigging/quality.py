@@ -21,6 +21,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from mimika.face.head import MeshObject
+from mimika.face.makehuman.artefacts import triangle_normals
 from mimika.face.rig import Rig
 from mimika.face.rigging.features import depth_behind, welded
 
@@ -28,11 +29,6 @@ __all__ = ["TORN", "TORN_MM", "facing", "measure", "measure_shapes", "triangle_c
 
 #: an edge stretched beyond this many times its length, and by more than TORN_MM, is torn
 TORN, TORN_MM = 3.0, 2.0
-
-
-def _unit_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
-    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
 
 
 def facing(v: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -56,11 +52,11 @@ def triangle_checks(v: np.ndarray, f: np.ndarray, d: np.ndarray) -> tuple[float,
     ok = l0 > 1e-4
     ratio = l1[ok] / l0[ok]
     grown = (l1 - l0)[ok] * 10
-    n0 = _unit_normals(v, f)
+    n0 = triangle_normals(v, f)
     folds = np.zeros(len(f), bool)
     for t in (0.5, 1.0):
         w = v + t * d
-        folds |= (facing(w, f) < 0) & ((_unit_normals(w, f) * n0).sum(1) < 0.5)
+        folds |= (facing(w, f) < 0) & ((triangle_normals(w, f) * n0).sum(1) < 0.5)
     flips = folds & (facing(v, f) > 0.5)
     return (float(ratio.max(initial=1.0)), int(((ratio > TORN) & (grown > TORN_MM)).sum()),
             int(flips.sum()))
