@@ -52,3 +52,38 @@ def test_a_failing_worker_is_one_render_error_with_the_way_out(builtin_rig):
 def test_short_clips_render_in_this_process():
     assert default_workers(100, 50) == 1
     assert default_workers(10_000, 50) >= 1
+
+
+def test_a_script_that_renders_at_import_fails_with_the_way_out_instead_of_hanging(tmp_path):
+    """Spawned workers re-run the script that started them; without a main guard they die
+    at once. The script's process gets a render error naming the guard (it used to block
+    forever writing the rig into a dead worker's pipe); nothing is left in /dev/shm."""
+    import glob
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import mimika
+
+    script = tmp_path / "unguarded.py"
+    script.write_text(
+        "import numpy as np\n"
+        "from mimika.face.heads import load_head\n"
+        "from mimika.render.camera import frame_head\n"
+        "from mimika.render.parallel import render_track\n"
+        "_, rig = load_head('builtin')\n"
+        "cam = frame_head(rig.head, 'front', aspect=1.0)\n"
+        "values = np.zeros((6, 1), np.float32)\n"
+        "frames = list(render_track(rig, values, ['AU12'], camera=cam, size=(32, 32), chunk=2,"
+        " workers=2))\n"
+        "print('rendered', len(frames))\n")
+    before = set(glob.glob("/dev/shm/mimika-frames-*"))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(Path(mimika.__file__).parents[1]), os.environ.get("PYTHONPATH", "")]))
+    p = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                       timeout=240, env=env, cwd=tmp_path)
+    assert p.returncode == 1 and "rendered" not in p.stdout
+    last = p.stderr.strip().splitlines()[-1]
+    assert last.startswith("mimika.errors.RenderError") and "__main__" in last, p.stderr[-2000:]
+    assert set(glob.glob("/dev/shm/mimika-frames-*")) <= before

@@ -17,6 +17,7 @@ import contextlib
 import itertools
 import logging
 import os
+import pickle
 import threading
 import time
 from collections import deque
@@ -66,17 +67,38 @@ def _watch_parent(ppid: int) -> None:
     os._exit(1)
 
 
-def _init(rig: Any, size: tuple[int, int], samples: int, skin: Any, lighting: Any,
-          lp_threads: int, hidden: Sequence[str] = (), ppid: int = 0,
-          camera: Any = None) -> None:
-    if ppid:
-        threading.Thread(target=_watch_parent, args=(ppid,), name="mimika-watch-parent",
-                         daemon=True).start()
+def _init(setup: str, ppid: int) -> None:
+    """Set a worker up from the settings its pool published (:func:`_publish`)."""
+    from multiprocessing import shared_memory
+
+    threading.Thread(target=_watch_parent, args=(ppid,), name="mimika-watch-parent",
+                     daemon=True).start()
+    shm = shared_memory.SharedMemory(setup)
+    try:
+        rig, size, samples, skin, lighting, lp_threads, hidden, camera = pickle.loads(shm.buf)
+    finally:
+        shm.close()
     os.environ.setdefault("LP_NUM_THREADS", str(lp_threads))
     renderer = _open(rig, size, samples, skin, lighting, hidden)
     if camera is not None:  # set up now (occlusion, textures, shaders): one frame at rest
         renderer.render(camera=camera, aus={})
-    _worker.update(rig=rig, renderer=renderer, ppid=ppid or os.getppid())
+    _worker.update(rig=rig, renderer=renderer, ppid=ppid)
+
+
+def _publish(settings: tuple) -> Any:
+    """The workers' settings (the rig among them, tens of MB) pickled once into a shared
+    memory block that each worker reads as it starts (named as the blocks of frames, so a
+    killed pool's is swept). Handed to ``spawn`` instead, they are written into each new
+    process's pipe, and a process that dies before reading them all (a script that starts a
+    render at import, without ``if __name__ == "__main__":``) leaves that write blocked
+    forever instead of breaking the pool."""
+    from multiprocessing import shared_memory
+
+    data = pickle.dumps(settings, protocol=pickle.HIGHEST_PROTOCOL)
+    shm = shared_memory.SharedMemory(f"{FRAMES}{os.getpid()}-{os.getpid()}-setup{next(_serial)}",
+                                     create=True, size=len(data))
+    shm.buf[:len(data)] = data
+    return shm
 
 
 def _ready() -> None:
@@ -210,26 +232,40 @@ class RenderPool:
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor
 
+        if getattr(mp.current_process(), "_inheriting", False):
+            # a spawned process re-running a script that renders at import: stop before
+            # making anything (the script's own process then reports the broken pool)
+            from mimika.errors import RenderError
+
+            raise RenderError("rendering processes cannot start while a new process starts "
+                              "up; start them under 'if __name__ == \"__main__\":'")
         self.workers = max(1, int(workers))
         # llvmpipe threads per worker: the cores shared out; 0 rasterises in the calling
         # thread (cheaper than handing every tile to a single helper thread)
         lp = (os.cpu_count() or 1) // self.workers
         lp = 0 if lp <= 1 else lp
         sweep_semaphores()
+        self._setup = _publish((rig, size, samples, skin, lighting, lp, tuple(hidden), camera))
         self.executor = ProcessPoolExecutor(
             self.workers, mp_context=mp.get_context("spawn"), initializer=_init,
-            initargs=(rig, size, samples, skin, lighting, lp, tuple(hidden), os.getpid(),
-                      camera))
+            initargs=(self._setup.name, os.getpid()))
         for _ in range(self.workers):  # spawned on demand: one task each starts them all
             self.executor.submit(_ready)
 
     def stop(self) -> None:
         """End the processes now, dropping what they are drawing."""
         _stop(self.executor)
+        self._unpublish()
 
     def close(self) -> None:
         """End the processes once they are idle."""
         self.executor.shutdown(wait=True, cancel_futures=True)
+        self._unpublish()
+
+    def _unpublish(self) -> None:
+        with contextlib.suppress(OSError):
+            self._setup.close()
+            self._setup.unlink()
 
     def __enter__(self) -> RenderPool:
         return self
