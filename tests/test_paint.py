@@ -288,6 +288,41 @@ def test_lashes_are_fine_strokes_not_bands(daniel):
 
 @needs_anny
 @pytest.mark.parametrize("asset", ["eyelashes01", "eyelashes02", "eyelashes03", "eyelashes04"])
+def test_lashes_grow_along_the_lid_opening_only(asset):
+    """An upper lash card that runs on past the eye's outer corner (toward the temple) has no
+    lashes there: drawn, they read as an eyeliner line from the corner up to the brow."""
+    from mimika.face.makehuman.build import SCALE, Outfit, build
+    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.paint.regions import uv_islands
+
+    c = replace(load_character_spec("amara"), eyelashes=asset)
+    piece = next(p for p in build(c.phenotype_values(), Outfit(None, None, asset, ())).pieces
+                 if p.name == "lashes")
+    img = strokes.paint_strokes(piece, c, "lash")
+    tris = np.concatenate(list(piece.parts.values()))
+    at = rasterize(piece.uvs, tris, img.shape[1::-1])
+    a = img.reshape(-1, 4)[at.texels, 3] / 255.0
+    pos = piece.vertices * SCALE
+    lab = uv_islands(tris, len(piece.uvs))
+    cards = strokes._cards(pos, tris, lab, "lash")
+    x = np.abs(at.at(pos[:, 0]))  # per texel, cm from the face's midline
+    card = lab[tris[at.faces_at(), 0]]
+    wing = 0
+    for side in (-1, 1):
+        row = [ids for ids, *_, lower in cards if np.sign(pos[ids, 0].mean()) == side]
+        lower = [ids for ids, *_, low in cards if low and np.sign(pos[ids, 0].mean()) == side]
+        reach = np.abs(pos[lower[0], 0]).max()
+        for ids in row:
+            past = (card == lab[ids[0]]) & (x > reach + 0.3)
+            wing += past.sum()
+            assert past.sum() == 0 or a[past].max() < 0.1, (asset, side, a[past].max())
+        assert (a[np.isin(card, lab[[r[0] for r in row]])] > 0.3).any()  # lashes there are
+    if asset == "eyelashes02":  # amara's: its upper rows do run on past the corners
+        assert wing > 100
+
+
+@needs_anny
+@pytest.mark.parametrize("asset", ["eyelashes01", "eyelashes02", "eyelashes03", "eyelashes04"])
 def test_every_lash_row_is_drawn_as_separate_hairs(asset):
     """No lash card is smeared into solid bands (a row that curls around the eye folded its
     along-the-row coordinate back on itself: mascara blobs on eyelashes02-04)."""

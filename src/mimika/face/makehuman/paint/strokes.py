@@ -108,6 +108,27 @@ def _cards(pos: np.ndarray, tris: np.ndarray, lab: np.ndarray, kind: str):
     return out
 
 
+def _lid_spans(pos: np.ndarray, cards: list) -> list[tuple[float, float]]:
+    """Per lash card, the stretch of ``s`` along the lid opening: an upper row may run on past
+    the outer corner of the eye (a wing toward the temple, eyelashes02–04), where lashes drawn
+    read as an eyeliner line up to the brow; the opening is the lower row's reach on that side
+    (its ends are the eye's corners). Rows without a lower partner keep their whole length."""
+    reach = {}
+    for ids, _, _, _, _, lower in cards:
+        if lower:
+            x = pos[ids, 0]
+            reach[np.sign(x.mean())] = (np.abs(x).min(), np.abs(x).max())
+    spans = []
+    for ids, s, _, _, _, lower in cards:
+        x = pos[ids, 0]
+        side = reach.get(np.sign(x.mean()))
+        inside = None if lower or side is None else \
+            (np.abs(x) >= side[0] - 0.1) & (np.abs(x) <= side[1] + 0.1)
+        spans.append((0.0, 1.0) if inside is None or not inside.any()
+                     else (float(s[inside].min()), float(s[inside].max())))
+    return spans
+
+
 def _draw(strokes, size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """Rasterise strokes [(points (k, 2) px, widths (k,) px, tone in [0, 2])] → coverage and
     tone."""
@@ -189,23 +210,26 @@ def brow_canvas(length_cm: float, height_cm: float, st: dict, seed: int
     return total, np.where(total > 1e-3, tone_all, 1.0).astype(np.float32)
 
 
-def lash_canvas(length_cm: float, height_cm: float, st: dict, lower: bool, seed: int
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Coverage and tone canvases (y up = toward the tips) of one lash row."""
+def lash_canvas(length_cm: float, height_cm: float, st: dict, lower: bool, seed: int,
+                span: tuple[float, float] = (0.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
+    """Coverage and tone canvases (y up = toward the tips) of one lash row; ``span``: the
+    stretch of the card (shares of its length) along the lid opening, where lashes grow."""
     rng = np.random.default_rng(seed)
     w = max(int(length_cm / CANVAS_CM), 8)
     h = max(int(height_cm / CANVAS_CM), 8)
     px = 1.0 / CANVAS_CM
+    s0, s1 = span
     n = int(st["count"] * (st["lower_share"] if lower else 1.0))
-    s = np.sort(rng.uniform(0.03, 0.97, n))
-    full = np.sin(np.pi * s) ** 0.6
+    u = np.sort(rng.uniform(0.03, 0.97, n))  # along the opening, corner to corner
+    full = np.sin(np.pi * u) ** 0.6
     keep = rng.random(n) < 0.45 + 0.55 * full  # sparse at the corners
-    s, full = s[keep], full[keep]
-    length = h * (0.45 + 0.5 * full) * (0.85 + 0.2 * s) * rng.uniform(0.8, 1.05, len(s))
+    u, full = u[keep], full[keep]
+    s = s0 + (s1 - s0) * u
+    length = h * (0.45 + 0.5 * full) * (0.85 + 0.2 * u) * rng.uniform(0.8, 1.05, len(s))
     if lower:
         length *= st["lower_length"] / 0.6
     length = np.minimum(length, 0.96 * h)
-    ang = np.radians(90 + st["splay_deg"] * (0.5 - s) * 2 * (0.6 + 0.4 * (1 - full)))
+    ang = np.radians(90 + st["splay_deg"] * (0.5 - u) * 2 * (0.6 + 0.4 * (1 - full)))
     ang += np.radians(7) * rng.standard_normal(len(s))
     root = np.column_stack([s * w, h * rng.uniform(0.0, 0.06, len(s))])
     tips = root + np.column_stack([np.cos(ang), np.sin(ang)]) * length[:, None]
@@ -218,7 +242,7 @@ def lash_canvas(length_cm: float, height_cm: float, st: dict, lower: bool, seed:
     strokes = []
     # the lash line (upper lid): short dense hairs and roots along the lid margin
     m = 0 if lower else len(s)
-    ls = np.sort(rng.uniform(0.02, 0.98, m))
+    ls = s0 + (s1 - s0) * np.sort(rng.uniform(0.02, 0.98, m))
     for i in range(m):
         r0 = np.array([ls[i] * w, h * rng.uniform(0.0, 0.03)])
         pts, wd = _stroke(r0, np.radians(90 + rng.normal(0, 12)),
@@ -230,7 +254,7 @@ def lash_canvas(length_cm: float, height_cm: float, st: dict, lower: bool, seed:
         k = np.linspace(0, 1, 7)[:, None]
         mid = 0.5 * (root[i] + tips[i])
         d = tips[i] - root[i]
-        normal = np.array([-d[1], d[0]]) * curl * 0.25 * np.sign(s[i] - 0.5 + 1e-6)
+        normal = np.array([-d[1], d[0]]) * curl * 0.25 * np.sign(u[i] - 0.5 + 1e-6)
         ctrl = mid + normal
         pts = (1 - k) ** 2 * root[i] + 2 * (1 - k) * k * ctrl + k ** 2 * tips[i]
         pts[:, 1] = h - pts[:, 1]
@@ -240,7 +264,8 @@ def lash_canvas(length_cm: float, height_cm: float, st: dict, lower: bool, seed:
     # one dark line under the hairs
     t = 1.0 - (np.arange(h) + 0.5) / h
     band = st["line"] * (0.5 if lower else 1.0) * np.clip((0.2 - t) / 0.12, 0.0, 1.0)
-    band = band[:, None] * np.sin(np.pi * (np.arange(w) + 0.5) / w)[None, :] ** 3
+    along = np.clip(((np.arange(w) + 0.5) / w - s0) / max(s1 - s0, 1e-6), 0.0, 1.0)
+    band = band[:, None] * np.sin(np.pi * along)[None, :] ** 3
     total = 1.0 - (1.0 - cov) * (1.0 - band.astype(np.float32))
     return total, np.where(total > 1e-3, (ton * cov + band * (1 - cov)) / np.maximum(total, 1e-3),
                            1.0).astype(np.float32)
@@ -281,13 +306,16 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
     alpha = np.zeros(len(fid), np.float32)
     tone = np.full(len(fid), 0.7, np.float32)
     tex_island = lab[tris[fid, 0]]
-    for i, (ids, s, t, length, height, lower) in enumerate(_cards(pos, tris, lab, kind)):
+    cards = _cards(pos, tris, lab, kind)
+    spans = _lid_spans(pos, cards) if kind == "lash" else [(0.0, 1.0)] * len(cards)
+    for i, ((ids, s, t, length, height, lower), span) in enumerate(zip(cards, spans,
+                                                                          strict=True)):
         sel = tex_island == lab[ids[0]]
         if not sel.any():
             continue
         seed = seed_of(kind, asset, character.name, i)
         a, tn = (brow_canvas(length, height, st, seed) if kind == "brow"
-                 else lash_canvas(length, height, st, lower, seed))
+                 else lash_canvas(length, height, st, lower, seed, span))
         # a texel shows the mean of the hairs it covers (no aliasing on thin UV islands)
         local = np.full(len(pos), -1)
         local[ids] = np.arange(len(ids))
