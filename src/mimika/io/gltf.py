@@ -13,7 +13,8 @@ Layout of the exported scene (units: the head's centimetres scaled to metres)::
   shininess, metallic 0; a part with alpha < 1 (the cornea) is blended;
 * **morph targets**: one per modelled linear AU and per side where the AU is sided
   (``AU12``, ``AU12L``, ``AU12R``): the rig's displacement at τ = 1 (:meth:`Rig.deform` of
-  ``{code: 1}`` minus rest), kept on the meshes it moves; names in ``mesh.extras.targetNames``;
+  ``{code: 1}`` minus rest), kept on the meshes it moves, as sparse accessors (the vertices
+  it moves); names in ``mesh.extras.targetNames``;
   on the eyeball meshes eye AUs are rotations, not morphs;
 * **head motion** is a skin: each vertex follows the head joint with the rig's neck fall-off
   weight (1 above the chin, smoothstep to 0 at the neck base) and the neck joint with the rest —
@@ -204,25 +205,33 @@ class _Builder:
 
     def add_sparse(self, d: np.ndarray) -> int:
         """A sparse VEC3 float accessor of morph deltas ``d`` (N, 3): only the vertices that
-        move are stored (a face shape moves a few thousand of a body's vertices); one that
-        moves none is an accessor of zeros with no data."""
+        move are stored (an AU moves a few thousand of a head's or body's vertices: a
+        character's GLB 25 → 14 MB); one that moves none is an accessor of zeros with no
+        data. The split is kept while a read-only ``d`` lives, as bounds are."""
         d = np.asarray(d, np.float32).reshape(-1, 3)
-        ids = np.flatnonzero(np.abs(d).max(1) > 0).astype(np.uint32) if len(d) else \
-            np.zeros(0, np.uint32)
-        vals = d[ids]
+        ids, vals, lo, hi = _derived(d, "sparse", lambda: _sparse(d))
         acc: dict[str, Any] = {"componentType": _FLOAT, "count": len(d), "type": "VEC3",
-                               "min": [0.0] * 3, "max": [0.0] * 3}
+                               "min": lo, "max": hi}
         if len(ids):
-            lo, hi = vals.min(0), vals.max(0)
-            if len(ids) < len(d):  # the vertices left out are 0
-                lo, hi = np.minimum(lo, 0), np.maximum(hi, 0)
-            acc["min"], acc["max"] = lo.astype(float).tolist(), hi.astype(float).tolist()
             acc["sparse"] = {"count": len(ids),
                              "indices": {"bufferView": self.add_bytes(ids.tobytes()),
                                          "componentType": _UINT},
                              "values": {"bufferView": self.add_bytes(vals.tobytes())}}
         self.accessors.append(acc)
         return len(self.accessors) - 1
+
+
+def _sparse(d: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[float], list[float]]:
+    """The moving vertices of deltas ``d`` (N, 3): their indices, deltas and the bounds of
+    all N (the vertices left out are 0)."""
+    ids = np.flatnonzero(np.abs(d).max(1) > 0).astype(np.uint32)
+    vals = np.ascontiguousarray(d[ids])
+    if not len(ids):
+        return ids, vals, [0.0] * 3, [0.0] * 3
+    lo, hi = vals.min(0), vals.max(0)
+    if len(ids) < len(d):
+        lo, hi = np.minimum(lo, 0), np.maximum(hi, 0)
+    return ids, vals, lo.astype(float).tolist(), hi.astype(float).tolist()
 
 
 _DELTAS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -504,8 +513,7 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
             joints[:, 1] = np.where(wts[:, 1] > 0, np.where(big, 0, 1), 0)
             attrs["JOINTS_0"] = b.add(joints, "VEC4", _USHORT, target=_ARRAY)
             attrs["WEIGHTS_0"] = b.add(wts, "VEC4", _FLOAT, target=_ARRAY)
-        targets = [{"POSITION": b.add(d, "VEC3", _FLOAT, target=_ARRAY, minmax=True)}
-                   for _, d in deltas[o.name]]
+        targets = [{"POSITION": b.add_sparse(d)} for _, d in deltas[o.name]]
         names = [c for c, _ in deltas[o.name]]
         meshes.append(_object_mesh(b, mats, o, attrs, targets, names))
         node: dict[str, Any] = {"name": o.name, "mesh": len(meshes) - 1}

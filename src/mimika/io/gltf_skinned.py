@@ -122,7 +122,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
         names, targets = [], []
         for c, d in [] if eye else morphs.get(o.name, []):
             names.append(c)
-            targets.append({"POSITION": b.add(d, "VEC3", _FLOAT, target=_ARRAY, minmax=True)})
+            targets.append({"POSITION": b.add_sparse(d)})
         meshes.append(_object_mesh(b, mats, o, attrs, targets, names))
         node = {"name": o.name, "mesh": len(meshes) - 1}
         nodes.append(node)
