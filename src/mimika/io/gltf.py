@@ -208,9 +208,9 @@ class _Builder:
         move are stored (an AU moves a few thousand of a head's or body's vertices: a
         character's GLB 25 → 14 MB); one that moves none is an accessor of zeros with no
         data. The split is kept while a read-only ``d`` lives, as bounds are."""
-        d = np.asarray(d, np.float32).reshape(-1, 3)
-        ids, vals, lo, hi = _derived(d, "sparse", lambda: _sparse(d))
-        acc: dict[str, Any] = {"componentType": _FLOAT, "count": len(d), "type": "VEC3",
+        flat = np.asarray(d, np.float32).reshape(-1, 3)
+        ids, vals, lo, hi = _derived(d, "sparse", lambda: _sparse(flat))
+        acc: dict[str, Any] = {"componentType": _FLOAT, "count": len(flat), "type": "VEC3",
                                "min": lo, "max": hi}
         if len(ids):
             acc["sparse"] = {"count": len(ids),
