@@ -287,6 +287,40 @@ def test_lashes_are_fine_strokes_not_bands(daniel):
 
 
 @needs_anny
+@pytest.mark.parametrize("asset", ["eyebrow001", "eyebrow005", "eyebrow009", "eyebrow010"])
+def test_a_brow_is_drawn_evenly_to_its_tail(asset):
+    """The brow's drawing runs along the card by distance over it: where the card bends back
+    around the temple its tail is as long as the rest (measured by the width from the nose, the
+    last fifth of the card got half its share of the drawing — the dense tail hairs piled up
+    into a dark blot at each brow's end)."""
+    import scipy.sparse as sparse
+    from scipy.sparse.csgraph import dijkstra
+
+    from mimika.face.makehuman.build import SCALE, Outfit, build
+    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.paint.regions import uv_islands
+
+    c = replace(load_character_spec("daniel"), eyebrows=asset)
+    piece = next(p for p in build(c.phenotype_values(), Outfit(None, asset, None, ())).pieces
+                 if p.name == "brows")
+    tris = np.concatenate(list(piece.parts.values()))
+    pos = piece.vertices * SCALE
+    lab = uv_islands(tris, len(piece.uvs))
+    cards = strokes._cards(pos, tris, lab, "brow")
+    assert len(cards) == 2
+    for ids, s, *_ in cards:
+        local = np.full(len(pos), -1)
+        local[ids] = np.arange(len(ids))
+        t = local[tris[np.isin(tris[:, 0], ids)]]
+        e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+        w = np.linalg.norm(pos[ids][e[:, 0]] - pos[ids][e[:, 1]], axis=1)
+        graph = sparse.coo_matrix((w, (e[:, 0], e[:, 1])), shape=(len(ids),) * 2).tocsr()
+        d = dijkstra(graph, directed=False, indices=int(np.argmin(np.abs(pos[ids, 0]))))
+        at_four_fifths = int(np.argmin(np.abs(d / d.max() - 0.8)))
+        assert s.max() - s[at_four_fifths] > 0.15, asset  # uniform: 0.2
+
+
+@needs_anny
 @pytest.mark.parametrize("asset", ["eyelashes01", "eyelashes02", "eyelashes03", "eyelashes04"])
 def test_lashes_grow_along_the_lid_opening_only(asset):
     """An upper lash card that runs on past the eye's outer corner (toward the temple) has no

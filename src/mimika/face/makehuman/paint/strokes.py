@@ -88,15 +88,14 @@ def _cards(pos: np.ndarray, tris: np.ndarray, lab: np.ndarray, kind: str):
         ltris = local[tris[tri_lab == i]]
         p = pos[ids]
         ax = np.abs(p[:, 0])
+        s = _along(p, ltris)
+        if np.corrcoef(s, ax)[0, 1] < 0:
+            s = 1.0 - s  # s grows away from the nose
         if kind == "brow":
-            s = (ax - ax.min()) / max(np.ptp(ax), 1e-6)
             up, lower = p[:, 1], False
         else:
             side = 1 if p[:, 0].mean() > 0 else -1
             lower = bool(p[:, 1].mean() < eyes[side][1])
-            s = _along(p, ltris)
-            if np.corrcoef(s, ax)[0, 1] < 0:
-                s = 1.0 - s  # s grows away from the nose
             up = np.linalg.norm(p - eyes[side], axis=1)  # roots on the lid, tips farther out
         t, height = _across(p, ltris, s, up)
         if kind == "lash" and p[t > 0.9, 2].mean() < p[t < 0.1, 2].mean():
