@@ -286,6 +286,26 @@ def test_lashes_are_fine_strokes_not_bands(daniel):
     assert np.median(img.reshape(-1, 4)[at.texels][a > 0.5, :3]) < 60  # dark
 
 
+def _asset_piece(preset: str, kind: str, asset: str):
+    """Character ``preset`` wearing brow or lash ``asset`` (``kind`` 'brows' or 'lashes') and
+    that piece of it, built."""
+    from mimika.face.makehuman.build import Outfit, build
+    from mimika.face.makehuman.character_file import load_character_spec
+
+    brows = kind == "brows"
+    c = replace(load_character_spec(preset), **{"eyebrows" if brows else "eyelashes": asset})
+    outfit = Outfit(None, asset, None, ()) if brows else Outfit(None, None, asset, ())
+    return c, next(p for p in build(c.phenotype_values(), outfit).pieces if p.name == kind)
+
+
+def _lash_alpha(c, piece):
+    """The piece's painted lashes: its triangles, their texel atlas and the alpha per texel."""
+    img = strokes.paint_strokes(piece, c, "lash")
+    tris = np.concatenate(list(piece.parts.values()))
+    at = rasterize(piece.uvs, tris, img.shape[1::-1])
+    return tris, at, img.reshape(-1, 4)[at.texels, 3] / 255.0
+
+
 @needs_anny
 @pytest.mark.parametrize("asset", ["eyebrow001", "eyebrow005", "eyebrow009", "eyebrow010"])
 def test_a_brow_is_drawn_evenly_to_its_tail(asset):
@@ -296,13 +316,10 @@ def test_a_brow_is_drawn_evenly_to_its_tail(asset):
     import scipy.sparse as sparse
     from scipy.sparse.csgraph import dijkstra
 
-    from mimika.face.makehuman.build import SCALE, Outfit, build
-    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.build import SCALE
     from mimika.face.makehuman.paint.regions import uv_islands
 
-    c = replace(load_character_spec("daniel"), eyebrows=asset)
-    piece = next(p for p in build(c.phenotype_values(), Outfit(None, asset, None, ())).pieces
-                 if p.name == "brows")
+    _, piece = _asset_piece("daniel", "brows", asset)
     tris = np.concatenate(list(piece.parts.values()))
     pos = piece.vertices * SCALE
     lab = uv_islands(tris, len(piece.uvs))
@@ -325,17 +342,11 @@ def test_a_brow_is_drawn_evenly_to_its_tail(asset):
 def test_lashes_grow_along_the_lid_opening_only(asset):
     """An upper lash card that runs on past the eye's outer corner (toward the temple) has no
     lashes there: drawn, they read as an eyeliner line from the corner up to the brow."""
-    from mimika.face.makehuman.build import SCALE, Outfit, build
-    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.build import SCALE
     from mimika.face.makehuman.paint.regions import uv_islands
 
-    c = replace(load_character_spec("amara"), eyelashes=asset)
-    piece = next(p for p in build(c.phenotype_values(), Outfit(None, None, asset, ())).pieces
-                 if p.name == "lashes")
-    img = strokes.paint_strokes(piece, c, "lash")
-    tris = np.concatenate(list(piece.parts.values()))
-    at = rasterize(piece.uvs, tris, img.shape[1::-1])
-    a = img.reshape(-1, 4)[at.texels, 3] / 255.0
+    c, piece = _asset_piece("amara", "lashes", asset)
+    tris, at, a = _lash_alpha(c, piece)
     pos = piece.vertices * SCALE
     lab = uv_islands(tris, len(piece.uvs))
     cards = strokes._cards(pos, tris, lab, "lash")
@@ -360,17 +371,10 @@ def test_lashes_grow_along_the_lid_opening_only(asset):
 def test_every_lash_row_is_drawn_as_separate_hairs(asset):
     """No lash card is smeared into solid bands (a row that curls around the eye folded its
     along-the-row coordinate back on itself: mascara blobs on eyelashes02-04)."""
-    from mimika.face.makehuman.build import Outfit, build
-    from mimika.face.makehuman.character_file import load_character_spec
     from mimika.face.makehuman.paint.regions import uv_islands
 
-    c = replace(load_character_spec("daniel"), eyelashes=asset)
-    piece = next(p for p in build(c.phenotype_values(), Outfit(None, None, asset, ())).pieces
-                 if p.name == "lashes")
-    img = strokes.paint_strokes(piece, c, "lash")
-    tris = np.concatenate(list(piece.parts.values()))
-    at = rasterize(piece.uvs, tris, img.shape[1::-1])
-    a = img.reshape(-1, 4)[at.texels, 3] / 255.0
+    c, piece = _asset_piece("daniel", "lashes", asset)
+    tris, at, a = _lash_alpha(c, piece)
     card = uv_islands(tris, len(piece.uvs))[tris[at.faces_at(), 0]]
     for k in np.unique(card):
         assert (a[card == k] > 0.9).mean() < 0.15, (asset, k)  # hairs with gaps, no bands
