@@ -31,6 +31,39 @@ def test_two_workers_give_the_frames_of_one(builtin_rig):
     assert np.abs(here[0].astype(int) - here[4].astype(int)).max() > 20
 
 
+def test_frames_handed_out_without_copies_stay_intact_while_their_memory_is_reused(
+        builtin_rig):
+    """The frames live in shared memory blocks that are reused once their frames are dropped:
+    frames taken one at a time (as a video writer does) match the frames drawn here, a frame
+    still held keeps its block from being drawn over, and no block is left behind."""
+    import glob
+    import os
+
+    from mimika.render import parallel
+
+    cam = frame_head(builtin_rig.head, "front", aspect=SIZE[0] / SIZE[1])
+    kw = dict(camera=cam, size=SIZE, skin=SkinParams(refresh=3), lighting=NEWS_LIGHTING,
+              chunk=2)
+    values = _values(12)
+    here = list(render_track(builtin_rig, values, CHANNELS, workers=1, **kw))
+    made = []
+    take = parallel._Ring.take
+    parallel._Ring.take = lambda ring, size: made.append(take(ring, size)) or made[-1]
+    try:
+        held, seen = None, []
+        for i, img in enumerate(render_track(builtin_rig, values, CHANNELS, workers=2, **kw)):
+            held = img if i == 1 else held  # kept while five more chunks are drawn
+            seen.append(img.copy())
+    finally:
+        parallel._Ring.take = take
+    for a, b in zip(here, seen, strict=True):
+        assert np.array_equal(a, b)
+    assert np.array_equal(held, here[1])
+    assert len(set(made)) < len(made) == 6  # blocks were drawn into again
+    pid = os.getpid()
+    assert not glob.glob(f"/dev/shm/{parallel.FRAMES}{pid}-*")
+
+
 def test_a_pool_started_ahead_gives_the_same_frames(builtin_rig):
     cam = frame_head(builtin_rig.head, "front", aspect=SIZE[0] / SIZE[1])
     kw = dict(camera=cam, size=SIZE, skin=SkinParams(refresh=3), lighting=NEWS_LIGHTING)

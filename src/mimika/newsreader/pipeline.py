@@ -51,6 +51,7 @@ SHOT_NAMES = tuple(SHOTS)
 #: the shot and video size of ``mimika news`` by default: a TV medium close-up in HD
 DEFAULT_SHOT: str = _shots()["default"]
 DEFAULT_SIZE: tuple[int, int] = tuple(_shots()["size"])  # type: ignore[assignment]
+CHUNK = 50  #: frames per task of a rendering process
 #: the default shot in the studio's terms (its viewer frames by the face, hairline to chin,
 #: which is about 0.83 of the head, crown to chin)
 FILL = SHOTS[DEFAULT_SHOT]["fill"]
@@ -234,36 +235,59 @@ def news_camera(head: Any, view: str, aspect: float, shot: str = DEFAULT_SHOT) -
     return frame_head(head, view, aspect=aspect, fill=s["fill"])
 
 
+def _frame_settings(rig: Any, *, size: tuple[int, int], view: str, skin_shader: bool,
+                    hair: bool, light: Any, shot: str) -> dict[str, Any]:
+    """The renderer settings of a news video (:func:`render_frames`), as
+    :func:`~mimika.render.parallel.render_track` and its pool take them."""
+    from mimika.face.heads.roles import objects_of_role
+    from mimika.render.lighting import parse_light
+    from mimika.render.skin import SkinParams
+
+    # video: the blurred skin irradiance is refreshed every third frame (see SkinParams)
+    return {"camera": news_camera(rig.head, view, size[0] / size[1], shot), "size": size,
+            "skin": SkinParams(refresh=3) if skin_shader else False,
+            "lighting": parse_light(light, "news"),
+            "hidden": () if hair else objects_of_role(rig.head, "hair")}
+
+
+def start_pool(rig: Any, *, workers: int, size: tuple[int, int], view: str = "front",
+               samples: int = 0, skin_shader: bool = True, hair: bool = True,
+               light: Any = None, shot: str = DEFAULT_SHOT) -> Any:
+    """Rendering processes for :func:`render_frames` with the same settings, started now so
+    that they set up while the caller is busy (e.g. with speech)."""
+    from mimika.render.parallel import RenderPool
+
+    return RenderPool(rig, workers=workers, samples=samples,
+                      **_frame_settings(rig, size=size, view=view, skin_shader=skin_shader,
+                                        hair=hair, light=light, shot=shot))
+
+
 def render_frames(rig: Any, track: AUTrack, *, size: tuple[int, int], view: str = "front",
                   samples: int = 0, skin_shader: bool = True, hair: bool = True,
-                  chunk: int = 50, workers: int | None = 1,
+                  chunk: int = CHUNK, workers: int | None = 1,
                   timings: dict[str, float] | None = None, light: Any = None,
-                  shot: str = DEFAULT_SHOT):
+                  shot: str = DEFAULT_SHOT, pool: Any = None):
     """Yield rendered frames, (H, W, 3) uint8 each, of ``track`` on ``rig``'s head.
 
     Frames are deformed and drawn in chunks of ``chunk`` by ``workers`` processes
-    (:mod:`mimika.render.parallel`; None: one per core for long tracks). The images do not
-    depend on ``workers``. ``hair=False`` leaves the hair out. ``light``: a ``--light``
-    spec or :class:`~mimika.render.lighting.Lighting` (default: the ``news`` set); ``shot``:
-    one of :data:`SHOTS`.
+    (:mod:`mimika.render.parallel`; None: one per core for long tracks), or by ``pool``
+    (:func:`start_pool` with the same settings). The images do not depend on ``workers``.
+    ``hair=False`` leaves the hair out. ``light``: a ``--light`` spec or
+    :class:`~mimika.render.lighting.Lighting` (default: the ``news`` set); ``shot``: one of
+    :data:`SHOTS`.
     """
-    from mimika.face.heads.roles import objects_of_role
-    from mimika.render.lighting import parse_light
     from mimika.render.parallel import default_workers, render_track
-    from mimika.render.skin import SkinParams
 
     tm = timings if timings is not None else {}
-    w, h = size
-    if workers is None:
+    if pool is not None:
+        workers = pool.workers
+    elif workers is None:
         workers = default_workers(track.n_frames, chunk)
-    cam = news_camera(rig.head, view, w / h, shot)
-    # video: the blurred skin irradiance is refreshed every third frame (see SkinParams)
-    skin = SkinParams(refresh=3) if skin_shader else False
-    frames = render_track(rig, track.values, track.channels, camera=cam, size=size,
-                          samples=samples, skin=skin, lighting=parse_light(light, "news"),
-                          chunk=chunk,
-                          workers=workers,
-                          hidden=() if hair else objects_of_role(rig.head, "hair"))
+    frames = render_track(rig, track.values, track.channels, samples=samples, chunk=chunk,
+                          workers=workers, pool=pool,
+                          **_frame_settings(rig, size=size, view=view,
+                                            skin_shader=skin_shader, hair=hair, light=light,
+                                            shot=shot))
     tm["workers"] = workers
     while True:  # the time spent waiting for frames
         t0 = time.perf_counter()
@@ -359,49 +383,65 @@ def render_news(text: str | Article, *, out: str | os.PathLike, lang: str = "en"
         t0 = time.perf_counter()
         _, rig = load_head(head or DEFAULT_HEAD)
         tm["load_head"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    if art is not None:
-        t1 = time.perf_counter()
-        if audio is not None:
-            from mimika.newsreader.article import align_article
-            from mimika.speech.audio import read_media
+    pool = None
+    if workers is None and audio is None and art is not None:
+        # the rendering processes set up while the voice still speaks (from the text's
+        # length: the frames are not known yet)
+        from mimika.render.parallel import default_workers
 
-            rec, sr = read_media(audio)
-            utt, paras = align_article(art, rec, sr=sr, lang=lang)
-            tm["align"] = time.perf_counter() - t1
-        else:
-            utt, paras = speech()
-            tm["tts_wait"] = time.perf_counter() - t1
-        t1 = time.perf_counter()
-        news = news_track(art, lang=lang, fps=fps, layers=enabled, seed=seed,
-                          supported=rig.supported, utterance=utt, paragraph_starts=paras,
-                          mood=mood)
-        tm["tracks"] = time.perf_counter() - t1
-    else:
-        news = news_track(text if isinstance(text, Article) else parse_article(text),
-                          lang=lang, fps=fps, layers=enabled, seed=seed,
-                          supported=rig.supported, utterance=news.utterance,
-                          paragraph_starts=news.paragraph_starts, mood=mood)
-        tm["tracks"] = time.perf_counter() - t0
-    track, utt = news.track, news.utterance
-    n = track.n_frames
-    if utt.meta.get("source") == "alignment":  # a recording: exactly as it was
-        sound = utt.audio
-    else:  # pad the audio to the video's length so both streams end together
-        sound = np.zeros(round(n / fps * utt.sr), np.float32)
-        sound[: min(len(sound), len(utt.audio))] = utt.audio[: len(sound)]
-    frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
-                           skin_shader="skin" in enabled, hair="hair" in enabled,
-                           workers=workers, timings=tm, light=light, shot=shot)
-    # closing: an interrupted render stops its worker processes at once
-    with VideoWriter(out, fps=fps, size=(w, h), audio=sound, sr=utt.sr, crf=crf,
-                     preset=preset, overlay=strap) as vw, contextlib.closing(frames):
-        for i, img in enumerate(frames):
-            vw.write(img)
-            if progress is not None:
-                progress(i + 1, n)
+        est = round(limits.speech_seconds(art.text, rate) * fps)
+        if default_workers(est, CHUNK) > 1:
+            pool = start_pool(rig, workers=default_workers(est, CHUNK), size=(w, h),
+                              view=view, samples=samples, skin_shader="skin" in enabled,
+                              hair="hair" in enabled, light=light, shot=shot)
+    try:
         t0 = time.perf_counter()
-    tm["encode_wait"] = time.perf_counter() - t0
+        if art is not None:
+            t1 = time.perf_counter()
+            if audio is not None:
+                from mimika.newsreader.article import align_article
+                from mimika.speech.audio import read_media
+
+                rec, sr = read_media(audio)
+                utt, paras = align_article(art, rec, sr=sr, lang=lang)
+                tm["align"] = time.perf_counter() - t1
+            else:
+                utt, paras = speech()
+                tm["tts_wait"] = time.perf_counter() - t1
+            t1 = time.perf_counter()
+            news = news_track(art, lang=lang, fps=fps, layers=enabled, seed=seed,
+                              supported=rig.supported, utterance=utt, paragraph_starts=paras,
+                              mood=mood)
+            tm["tracks"] = time.perf_counter() - t1
+        else:
+            news = news_track(text if isinstance(text, Article) else parse_article(text),
+                              lang=lang, fps=fps, layers=enabled, seed=seed,
+                              supported=rig.supported, utterance=news.utterance,
+                              paragraph_starts=news.paragraph_starts, mood=mood)
+            tm["tracks"] = time.perf_counter() - t0
+        track, utt = news.track, news.utterance
+        n = track.n_frames
+        if utt.meta.get("source") == "alignment":  # a recording: exactly as it was
+            sound = utt.audio
+        else:  # pad the audio to the video's length so both streams end together
+            sound = np.zeros(round(n / fps * utt.sr), np.float32)
+            sound[: min(len(sound), len(utt.audio))] = utt.audio[: len(sound)]
+        frames = render_frames(rig, track, size=(w, h), view=view, samples=samples,
+                               skin_shader="skin" in enabled, hair="hair" in enabled,
+                               workers=workers, timings=tm, light=light, shot=shot, pool=pool)
+        # closing: an interrupted render stops its worker processes at once
+        with VideoWriter(out, fps=fps, size=(w, h), audio=sound, sr=utt.sr, crf=crf,
+                         preset=preset, overlay=strap) as vw, contextlib.closing(frames):
+            for i, img in enumerate(frames):
+                vw.write(img)
+                if progress is not None:
+                    progress(i + 1, n)
+            t0 = time.perf_counter()
+        tm["encode_wait"] = time.perf_counter() - t0
+    except BaseException:  # the early rendering processes end with the render
+        if pool is not None:
+            pool.stop()
+        raise
     tm["encode"] = vw.encode_seconds
     srt = None
     if subtitles:

@@ -508,6 +508,7 @@ class Renderer:
         view: str = "front",
         camera: Camera | None = None,
         aus: Mapping[str, float] | None = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """Draw the head and return the image, shape (H, W, 3) uint8 RGB, top row first.
 
@@ -515,9 +516,15 @@ class Renderer:
         are drawn at rest. ``camera`` overrides the camera of ``view``. ``aus``, the AU
         intensities the positions were made from, add their appearance changes — furrows
         and lines (:mod:`mimika.render.wrinkles`); without them the skin stays smooth.
+        ``out``: an (H, W, 3) uint8 array the image is written into (and returned), e.g. a
+        slot of shared memory — no new image is allocated.
         """
         cam = camera if camera is not None else self.camera(view)
         pos = self._check_positions(positions)
+        if out is not None and (out.shape != (self.size[1], self.size[0], 3)
+                                or out.dtype != np.uint8):
+            raise ParameterError(f"out has shape {out.shape} {out.dtype}; expected "
+                                 f"({self.size[1]}, {self.size[0]}, 3) uint8")
         ctx = get_context()
         # the context is shared by every renderer of the process: make it current and keep
         # other threads out while this frame is drawn (GL contexts are not thread-safe)
@@ -527,9 +534,10 @@ class Renderer:
             if self._wrinkles is not None:
                 w = self._wrinkles.weights(aus)
                 self._wr = w.tobytes() if w.any() else None
-            return self._draw(gl, ctx, cam, pos)
+            return self._draw(gl, ctx, cam, pos, out)
 
-    def _draw(self, gl: dict, ctx: Any, cam: Camera, pos: dict) -> np.ndarray:
+    def _draw(self, gl: dict, ctx: Any, cam: Camera, pos: dict,
+              out: np.ndarray | None) -> np.ndarray:
         try:
             inside = {} if self._mouth is None else self._mouth.visibility(pos)
             for o in self._objects:
@@ -617,13 +625,19 @@ class Renderer:
                 ctx.disable(ctx.BLEND)
             if gl["resolve"] is not fbo:
                 ctx.copy_framebuffer(gl["resolve"], fbo)
-            data = gl["resolve"].read(components=3, alignment=1)
+            w, h = self.size
+            if "readback" not in gl:  # one buffer for every frame: no new pages each time
+                gl["readback"] = bytearray(w * h * 3)
+            gl["resolve"].read_into(gl["readback"], components=3, alignment=1)
         except RenderError:
             raise
         except Exception as exc:  # moderngl raises plain Errors
             raise RenderError(f"rendering {self.head.name!r} failed: {exc}") from exc
-        w, h = self.size
-        return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
+        img = np.frombuffer(gl["readback"], np.uint8).reshape(h, w, 3)[::-1]
+        if out is None:
+            return img.copy()
+        np.copyto(out, img)
+        return out
 
     def _opaque_order(self) -> list[_GpuObject]:
         """The objects in the order their opaque parts are drawn: clothes and the like, the

@@ -228,6 +228,9 @@ def _load(model: Path, config: Path):
         _deterministic(m)
         opts = onnxruntime.SessionOptions()
         opts.intra_op_num_threads = THREADS
+        # idle threads sleep instead of spinning: a spinning thread takes a core from
+        # whatever runs beside the voice (the newsreader's renderers set up meanwhile)
+        opts.add_session_config_entry("session.intra_op.allow_spinning", "0")
         session = onnxruntime.InferenceSession(m.SerializeToString(), sess_options=opts,
                                                providers=["CPUExecutionProvider"])
     except Exception as e:  # onnx/onnxruntime raise their own types for a broken model
