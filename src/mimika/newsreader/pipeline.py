@@ -51,7 +51,7 @@ SHOT_NAMES = tuple(SHOTS)
 #: the shot and video size of ``mimika news`` by default: a TV medium close-up in HD
 DEFAULT_SHOT: str = _shots()["default"]
 DEFAULT_SIZE: tuple[int, int] = tuple(_shots()["size"])  # type: ignore[assignment]
-CHUNK = 50  #: frames per task of a rendering process
+CHUNK = 25  #: frames per task of a rendering process
 #: the default shot in the studio's terms (its viewer frames by the face, hairline to chin,
 #: which is about 0.83 of the head, crown to chin)
 FILL = SHOTS[DEFAULT_SHOT]["fill"]

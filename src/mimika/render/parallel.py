@@ -370,7 +370,7 @@ def render_track(rig: Any, values: np.ndarray, channels: Sequence[str], *, camer
             block = ring.take(frame_bytes * len(values[i0:i0 + chunk]))
             pending.append((block, pool.executor.submit(
                 _render_chunk, values[i0:i0 + chunk], list(channels), camera, block)))
-            if len(pending) > pool.workers:
+            if len(pending) > pool.workers + 1:
                 block, fut = pending.popleft()
                 yield from ring.lease(block, fut.result())
         while pending:

