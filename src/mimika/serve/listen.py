@@ -22,7 +22,7 @@ from mimika import limits
 from mimika.errors import ParameterError
 from mimika.serve.speech import FPS
 
-LOOKAHEAD = 0.1  #: a frame is sent once this much audio past it has come (s; 0…1)
+LOOKAHEAD = 0.09  #: a frame is sent once this much audio past it has come (s; 0…1)
 HOP = 0.0  #: send at most this often (s of audio; 0: whenever frames are final)
 EXTEND = 0.1  #: an open segment is taken to last at least this long (s): a typical phone
 
