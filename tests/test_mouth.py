@@ -74,3 +74,19 @@ def test_parting_lips_leave_no_flap_over_the_front_teeth(character_rig, aus):
         skin[:, 2] > pos["teeth"][up, 2].max() - 0.05)
     hang = skin[lm[62], 1] - skin[front, 1].min()
     assert hang < 0.4, f"{aus}: the upper lip hangs {10 * hang:.1f} mm over the teeth"
+
+
+@pytest.mark.parametrize("name", ["amara", "daniel", "mei", "tomas"])
+def test_a_relaxed_mouth_is_closed_and_au25_parts_it(name):
+    """At rest the inner lip edges meet (MakeHuman left amara's 2.4-3.0 mm apart, the teeth
+    showing between them: her neutral face read "surprised" to face-api); AU25 parts them."""
+    from mimika.face.heads import load_head
+
+    head, rig = load_head(name)
+    lm = head.landmarks
+
+    def gap(skin):  # mean vertical distance of the inner lip edges, 61-63 over 67-65, in mm
+        return 10 * float(np.mean(skin[lm[[61, 62, 63]], 1] - skin[lm[[67, 66, 65]], 1]))
+
+    assert abs(gap(head["skin"].vertices)) < 0.5
+    assert gap(rig.deform({"AU25": 1.0})["skin"]) > 4.0

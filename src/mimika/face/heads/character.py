@@ -21,6 +21,7 @@ from mimika.face.head import Head, MeshObject, Part
 from mimika.face.makehuman import cache
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
 from mimika.face.makehuman.character_file import Character, load_character_spec
+from mimika.face.makehuman.lips import seal_lips
 from mimika.face.makehuman.paint import parts_of
 from mimika.face.makehuman.skeleton import rest_pose, skin
 from mimika.face.makehuman.teeth import seat_teeth
@@ -175,7 +176,8 @@ def _with_ict_style(built: Built) -> Built:
 
 
 def built_character(character: Character) -> Built:
-    """The character's geometry, from the cache or built (and cached), teeth seated."""
+    """The character's geometry, from the cache or built (and cached), lips together at
+    rest and teeth seated behind them."""
     path = cache.cache_path(character.geometry_key())
     built = cache.load(path)
     if built is None:
@@ -186,7 +188,7 @@ def built_character(character: Character) -> Built:
             cache.save(path, built)
         except OSError as e:
             log.warning("cannot cache character %r in %s: %s", character.name, path, e)
-    return seat_teeth(built)
+    return seat_teeth(seal_lips(built))
 
 
 _LOADED: dict[str, tuple[Head, SkinnedRig]] = {}
