@@ -372,8 +372,10 @@ def load_gltf_head(path: str | Path) -> tuple[Head, AvatarRig]:
     notes = lower_arms(scene, [pc.mesh for pc in parts], frame.apply, frame.rotation,
                        float(lm_pts[27:31, 0].mean()))
     verts = [frame.apply(pc.mesh.vertices) for pc in parts]
+    # the mouth at the lips (inner lip landmarks): closed lips leave no opening in front,
+    # and the cavity found behind them lies deeper than the teeth
     feats = {"eye_L": frame.features.eye_L, "eye_R": frame.features.eye_R,
-             "mouth": frame.features.mouth, "chin": lm_pts[8]}
+             "mouth": lm_pts[60:68].mean(0), "chin": lm_pts[8]}
     skin_v = verts[face_i]
     above = skin_v[skin_v[:, 1] > lm_pts[8, 1]]
     tree = cKDTree(skin_v)
