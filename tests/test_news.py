@@ -267,3 +267,26 @@ def test_rendering_workers_write_the_same_video(spoken, builtin_rig, tmp_path):
     a, b = frames(1), frames(2)
     assert len(a) == len(b) > 50
     assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+
+
+def test_a_voice_that_fails_ends_the_rendering_processes_started_for_it(tmp_path,
+                                                                        monkeypatch):
+    """The rendering processes start while the voice speaks; when the voice fails they end
+    with the render, leave no shared memory behind and no video."""
+    import glob
+    import multiprocessing as mp
+    import os
+
+    from mimika.errors import ParameterError
+    from mimika.newsreader import pipeline
+
+    started = []
+    start = pipeline.start_pool
+    monkeypatch.setattr(pipeline, "start_pool",
+                        lambda *a, **k: started.append(start(*a, **k)) or started[-1])
+    with pytest.raises(ParameterError, match="unknown voice"):
+        pipeline.render_news(" ".join([TEXT] * 3), out=tmp_path / "x.mp4", head="builtin",
+                             voice="no-such-voice")
+    assert started and not mp.active_children()
+    assert not glob.glob(f"/dev/shm/mimika-frames-{os.getpid()}-*")
+    assert not list(tmp_path.iterdir())
