@@ -43,7 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 CHUNK = 0.05  #: seconds of audio per listen message
-LOOKAHEADS = (0.1, 0.15, 0.2, 0.3, 0.5)
+LOOKAHEADS = (0.09, 0.15, 0.2, 0.3, 0.5)
 SENTENCES = ("Bob bought a big map, and a blue pub.",
              "Please move the purple bottle beside my lamp.",
              "We might maybe meet by the bay before the rain comes.",
