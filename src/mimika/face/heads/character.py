@@ -10,15 +10,14 @@ table ``face/data/makehuman_aus.json`` and head/body motion by skinning.
 from __future__ import annotations
 
 import copy
-import json
 import logging
 from collections.abc import Mapping
-from importlib import resources
 
 import numpy as np
 
 from mimika.face.head import Head, MeshObject, Part
 from mimika.face.makehuman import cache
+from mimika.face.makehuman.base import first_copies, landmark_ids
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
 from mimika.face.makehuman.character_file import Character, load_character_spec
 from mimika.face.makehuman.lips import seal_lips
@@ -54,13 +53,8 @@ def _to_head_frame(built: Built) -> tuple[float, np.ndarray]:
 
 
 def _landmark_ids(skin_weld: np.ndarray) -> np.ndarray:
-    """The 68 landmarks as skin vertex indices (data file: hm08 base vertex ids)."""
-    text = resources.files("mimika.face.makehuman").joinpath("data", "hm08_landmarks.json")
-    base_ids = np.asarray(json.loads(text.read_text("utf-8")), np.int64)
-    first = {}
-    for i, b in enumerate(skin_weld.tolist()):
-        first.setdefault(b, i)
-    return np.array([first[int(b)] for b in base_ids], np.int64)
+    """The 68 landmarks as skin vertex indices."""
+    return first_copies(skin_weld, landmark_ids())
 
 
 #: shapes of an AU recipe that stay MakeHuman's when the AU is mixed with the ict style: the

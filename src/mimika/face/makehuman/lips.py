@@ -13,25 +13,21 @@ the 68-point landmarks 61-63 and 65-67; AU25 and the jaw then part them from the
 from __future__ import annotations
 
 import dataclasses
-import functools
-import json
-from importlib import resources
 
 import numpy as np
 
+from mimika.face.makehuman.base import landmark_ids
 from mimika.face.makehuman.build import Built
 
 #: the most of ``mouthClose`` a rest pose takes (it presses the lips together beyond that)
 MAX_WEIGHT = 0.2
 
 
-@functools.cache
-def _inner_lips() -> tuple[list[int], list[int]]:
+def _inner_lips() -> tuple[np.ndarray, np.ndarray]:
     """Base-mesh vertex ids of the inner lip edges: upper 61-63 and the lower ones under them
     (67-65), as pairs."""
-    text = resources.files("mimika.face.makehuman").joinpath("data", "hm08_landmarks.json")
-    ids = json.loads(text.read_text("utf-8"))
-    return [ids[61], ids[62], ids[63]], [ids[67], ids[66], ids[65]]
+    ids = landmark_ids()
+    return ids[[61, 62, 63]], ids[[67, 66, 65]]
 
 
 def seal_weight(built: Built) -> float:

@@ -20,6 +20,7 @@ from importlib import resources
 
 import numpy as np
 
+from mimika.face.makehuman.base import landmark_ids
 from mimika.face.makehuman.build import SCALE, Built, Piece
 from mimika.face.makehuman.paint.regions import uv_islands
 
@@ -35,9 +36,8 @@ def settings() -> dict:
 @functools.cache
 def _lip_landmarks() -> tuple[int, int, int, int]:
     """Base-mesh vertex ids of landmarks 48, 54 (mouth corners), 62 and 66 (inner lip edges)."""
-    text = resources.files("mimika.face.makehuman").joinpath("data", "hm08_landmarks.json")
-    ids = json.loads(text.read_text("utf-8"))
-    return ids[48], ids[54], ids[62], ids[66]
+    ids = landmark_ids()
+    return int(ids[48]), int(ids[54]), int(ids[62]), int(ids[66])
 
 
 def gum_faces(piece: Piece) -> np.ndarray:

@@ -11,12 +11,11 @@ the 68 landmarks, so regions follow any phenotype and patterns are continuous ac
 from __future__ import annotations
 
 import itertools
-import json
-from importlib import resources
 
 import numpy as np
 import scipy.sparse as sp
 
+from mimika.face.makehuman.base import first_copies, landmark_ids
 from mimika.face.makehuman.build import SCALE as CM
 from mimika.face.makehuman.build import Piece, asset_path
 from mimika.face.makehuman.character_file import Character
@@ -43,12 +42,7 @@ PAD = 6
 
 def landmarks(piece: Piece) -> np.ndarray:
     """The 68 landmarks (68, 3) in cm at the piece's bind pose."""
-    text = resources.files("mimika.face.makehuman").joinpath("data", "hm08_landmarks.json")
-    ids = json.loads(text.read_text("utf-8"))
-    first: dict[int, int] = {}
-    for i, b in enumerate(piece.weld.tolist()):
-        first.setdefault(b, i)
-    return piece.vertices[[first[int(b)] for b in ids]].astype(np.float64) * CM
+    return piece.vertices[first_copies(piece.weld, landmark_ids())].astype(np.float64) * CM
 
 
 def head_uvs(uv: np.ndarray, verts: np.ndarray) -> np.ndarray:
