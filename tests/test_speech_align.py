@@ -48,6 +48,24 @@ def test_align_other_rate_resampled_german():
     assert np.median(_errors(rec, est)) <= 0.030
 
 
+@pytest.mark.parametrize("lang, text, after", [
+    ("de", "Der Stadtrat hat am Montag lange beraten und dann entschieden.", 3),
+    ("pl", "Rada miasta obradowała w poniedziałek do późnego wieczora.", 2)])
+def test_dtw_keeps_a_pause_the_speaker_made(lang, text, after):
+    """A pause in the middle of a sentence (espeak's reference has none there) stays silent:
+    the words on either side end and start at its edges instead of stretching over it."""
+    rec = synthesize(text, lang=lang, voice="f3", rate=150)
+    w = rec.words[after]
+    k = round(w.start * rec.sr)
+    gap = 0.6
+    audio = np.concatenate([rec.audio[:k], np.zeros(round(gap * rec.sr), np.float32),
+                            rec.audio[k:]])
+    est = align(audio, sr=rec.sr, transcript=text, lang=lang, engine="dtw")
+    before, resume = est.words[after - 1], est.words[after]
+    assert abs(before.end - rec.words[after - 1].end) <= 0.06
+    assert abs(resume.start - (w.start + gap)) <= 0.06
+
+
 def test_align_errors():
     with pytest.raises(ParameterError, match="transcript is empty"):
         align(np.zeros(22050, np.float32), sr=22050, transcript=" ")
@@ -100,3 +118,18 @@ def test_cli_errors_exit_2(cli, tmp_path, capsys):
 def test_cli_voices(cli, capsys):
     assert cli(["voices", "--lang", "pl"]) == 0
     assert "Polish" in capsys.readouterr().out
+
+
+def test_word_after_a_pause_starts_at_its_first_sound():
+    """A stop begins with a silent closure before its burst; a vowel begins with its sound."""
+    from mimika.speech.phonemes import is_stop
+    from mimika.speech.utterance import Phone
+    from mimika.speech.vad import CLOSURE, ONSET, refine_edges
+
+    act = np.zeros(300, bool)
+    act[120:200] = True  # sound from 1.2 s to 2.0 s (10 ms frames)
+    for sym, lead in (("a", ONSET), ("k", CLOSURE)):
+        phones = [Phone("_", 0.0, 1.1), Phone(sym, 1.1, 2.0), Phone("_", 2.0, 3.0)]
+        out = refine_edges(phones, act, is_stop=lambda s: is_stop(s, "de"))
+        assert out[1].start == pytest.approx(1.2 - lead)
+    assert CLOSURE > ONSET

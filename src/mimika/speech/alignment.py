@@ -142,20 +142,54 @@ ENGINES = ("auto", "sphinx", "dtw")
 MARGIN = 0.1
 
 
-def _dtw_phones(a: np.ndarray, sr: int, transcript: str, lang: str, voice: str | None,
-                act: np.ndarray) -> tuple[list[Phone], float]:
-    """espeak's phones of ``transcript`` warped onto the speech part of the recording."""
+#: a silence at least this long inside the speech, where the reference has no pause, is a
+#: pause the speaker made (s): the reference gets one there and is warped again
+SPEAKER_PAUSE = 0.25
+#: how far from such a silence the word boundary it falls on may be mapped (s)
+PAUSE_REACH = 0.5
+
+
+def _dtw_phones(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice: str | None,
+                act: np.ndarray) -> tuple[list[Phone], list[int], float]:
+    """espeak's phones of ``transcript`` warped onto the speech part of the recording, the
+    token index of each (see :func:`~mimika.speech.words.assign_phones`) and the path cost.
+
+    espeak pauses at sentence ends and breaks only; where the speaker paused elsewhere, the
+    warp would stretch the words next to it over the silence — so the reference gets the
+    speaker's pauses (silence spliced in at the nearest word boundary) and is warped again.
+    """
     from mimika.speech.tts import synthesize
+    from mimika.speech.vad import activity
+    from mimika.speech.words import assign_phones
+
+    ref = synthesize(transcript, lang=lang, voice=voice, engine="espeak")
+    ref_audio, ref_phones = ref.audio, list(ref.phonemes)
+    phones, cost = _warp_phones(a, sr, ref_audio, ref.sr, ref_phones, act)
+    owner = assign_phones(phones, toks, lang=lang)
+    runs = _quiet_runs(act)
+    if runs:  # every frame quiet: two stop closures around a short word are no pause
+        runs = _quiet_runs(activity(a, sr=sr, min_run=0.0))
+    cuts = _speaker_pauses(phones, owner, runs)
+    if cuts:
+        ref_audio, ref_phones = _splice_pauses(ref_audio, ref.sr, ref_phones, cuts)
+        phones, cost = _warp_phones(a, sr, ref_audio, ref.sr, ref_phones, act)
+        owner = assign_phones(phones, toks, lang=lang)
+    return phones, owner, cost
+
+
+def _warp_phones(a: np.ndarray, sr: int, ref_audio: np.ndarray, ref_sr: int,
+                 ref_phones: list[Phone], act: np.ndarray) -> tuple[list[Phone], float]:
+    """The reference's phones mapped onto the recording by DTW of their features."""
     from mimika.speech.vad import activity, speech_span
 
     dur = len(a) / sr
     span = speech_span(act) or (0.0, dur)
     c0, c1 = max(0.0, span[0] - MARGIN), min(dur, span[1] + MARGIN)
     rec = a[int(c0 * sr):round(c1 * sr)]
-    ref = synthesize(transcript, lang=lang, voice=voice, engine="espeak")
-    rspan = speech_span(activity(ref.audio, sr=ref.sr)) or (0.0, ref.duration)
-    r0, r1 = max(0.0, rspan[0] - MARGIN), min(ref.duration, rspan[1] + MARGIN)
-    ref_mel = mel_power(ref.audio[int(r0 * ref.sr):round(r1 * ref.sr)], sr=ref.sr)
+    ref_dur = len(ref_audio) / ref_sr
+    rspan = speech_span(activity(ref_audio, sr=ref_sr)) or (0.0, ref_dur)
+    r0, r1 = max(0.0, rspan[0] - MARGIN), min(ref_dur, rspan[1] + MARGIN)
+    ref_mel = mel_power(ref_audio[int(r0 * ref_sr):round(r1 * ref_sr)], sr=ref_sr)
     rec_mel = mel_power(rec, sr=sr)
     x = mfcc_features(_match_noise(ref_mel, rec_mel))
     del ref_mel
@@ -169,11 +203,78 @@ def _dtw_phones(a: np.ndarray, sr: int, transcript: str, lang: str, voice: str |
         return float(np.clip(c0 + np.interp(t - r0, knots_ref, knots_rec), 0.0, dur))
 
     phones: list[Phone] = []
-    for k, p in enumerate(ref.phonemes):
+    for k, p in enumerate(ref_phones):
         s = 0.0 if k == 0 else phones[-1].end
-        e = dur if k == len(ref.phonemes) - 1 else max(mp(p.end), s)
+        e = dur if k == len(ref_phones) - 1 else max(mp(p.end), s)
         phones.append(Phone(p.symbol, s, e, p.stress))
     return phones, cost
+
+
+def _quiet_runs(act: np.ndarray) -> list[tuple[float, float]]:
+    """``(start, end)`` s of each run of inactive frames of at least :data:`SPEAKER_PAUSE`
+    between the first and the last active frame."""
+    from mimika.speech.vad import HOP as ACT_HOP
+
+    on = np.flatnonzero(act)
+    if not len(on):
+        return []
+    quiet = ~act[on[0]:on[-1] + 1]
+    edges = np.flatnonzero(np.diff(np.r_[0, quiet.astype(np.int8), 0])) + on[0]
+    return [(q0 * ACT_HOP, q1 * ACT_HOP) for q0, q1 in zip(edges[::2], edges[1::2], strict=True)
+            if (q1 - q0) * ACT_HOP >= SPEAKER_PAUSE - 1e-9]
+
+
+def _speaker_pauses(phones: list[Phone], owner: list[int], runs: list[tuple[float, float]]
+                    ) -> list[tuple[int, float]]:
+    """``(phone index, seconds)`` for each silence of ``runs`` (:func:`_quiet_runs`) that no
+    pause phone covers: the first phone of the word whose mapped start is nearest to it
+    (within :data:`PAUSE_REACH`), and the silence's length. A silence nearest to the first
+    word's start or the last word's end is not between words (a breath or a click beyond the
+    words)."""
+    words = sorted(set(o for o in owner if o >= 0))
+    if not runs or len(words) < 2:
+        return []
+    first: dict[int, int] = {}
+    for i, o in enumerate(owner):
+        if o >= 0:
+            first.setdefault(o, i)
+    last = max(i for i, o in enumerate(owner) if o >= 0)
+    # candidate places: every word's start, and the end of the last word
+    at = [phones[first[w]].start for w in words] + [phones[last].end]
+    out: dict[int, float] = {}
+    for t0, t1 in runs:
+        covered = sum(max(0.0, min(p.end, t1) - max(p.start, t0)) for p in phones if p.is_pause)
+        if covered >= 0.5 * (t1 - t0):
+            continue
+        gap = [max(t0 - t, t - t1, 0.0) for t in at]
+        k = int(np.argmin(gap))
+        if 0 < k < len(words) and gap[k] <= PAUSE_REACH:
+            i = first[words[k]]
+            out[i] = max(out.get(i, 0.0), t1 - t0)
+    return sorted(out.items())
+
+
+def _splice_pauses(audio: np.ndarray, sr: int, phones: list[Phone],
+                   cuts: list[tuple[int, float]]) -> tuple[np.ndarray, list[Phone]]:
+    """The reference with ``seconds`` of silence before each phone index of ``cuts`` (a pause
+    phone already there grows instead); phone times move with it."""
+    parts, out = [], []
+    k0, shift, todo = 0, 0.0, dict(cuts)
+    for i, p in enumerate(phones):
+        if i in todo:
+            at = round(p.start * sr)
+            n = round(todo[i] * sr)
+            parts += [audio[k0:at], np.zeros(n, audio.dtype)]
+            k0 = at
+            t = p.start + shift
+            if out and out[-1].is_pause:
+                out[-1] = Phone(out[-1].symbol, out[-1].start, t + n / sr, out[-1].stress)
+            else:
+                out.append(Phone("_", t, t + n / sr))
+            shift += n / sr
+        out.append(Phone(p.symbol, p.start + shift, p.end + shift, p.stress))
+    parts.append(audio[k0:])
+    return np.concatenate(parts), out
 
 
 #: recording kept around the detected speech for pocketsphinx (s)
@@ -234,10 +335,9 @@ def _sphinx_long(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice
     cannot align keeps the DTW phones (``strict``: raises instead)."""
     from mimika.speech import pieces
     from mimika.speech.vad import HOP as ACT_HOP
-    from mimika.speech.words import as_read, assign_phones
+    from mimika.speech.words import as_read
 
-    dphones, _ = _dtw_phones(a, sr, as_read(transcript), lang, voice, act)
-    downer = assign_phones(dphones, toks, lang=lang)
+    dphones, downer, _ = _dtw_phones(a, sr, as_read(transcript), toks, lang, voice, act)
     spans = _word_spans(dphones, downer, len(toks))
     cuts = [round(t * sr) for t in pieces.cut_times(spans, act, len(a) / sr)]
     bounds = [0, *cuts, len(a)]
@@ -289,9 +389,10 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
         written words; ``meta["engine"]`` says which engine ran.
     """
     from mimika.speech import espeak, pieces, sphinx
+    from mimika.speech.phonemes import is_stop
     from mimika.speech.tts import split_sentences
     from mimika.speech.vad import activity, pad, refine_edges, unpad
-    from mimika.speech.words import Token, as_read, assign_phones, tokens
+    from mimika.speech.words import Token, as_read, tokens
 
     if engine not in ENGINES:
         raise ParameterError(f"engine={engine!r} must be one of {', '.join(ENGINES)}")
@@ -322,11 +423,11 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
             log.warning("%s; aligning by DTW instead", e)
             use = "dtw"
     if use == "dtw":
-        phones, cost = _dtw_phones(a, int(sr), as_read(transcript), code, voice, act)
-        owner = assign_phones(phones, toks, lang=code)
+        phones, owner, cost = _dtw_phones(a, int(sr), as_read(transcript), toks, code, voice,
+                                          act)
         meta["alignment_cost"] = round(cost, 4)
     phones, owner = pad(phones, owner)
-    phones = refine_edges(phones, act)
+    phones = refine_edges(phones, act, is_stop=lambda sym: is_stop(sym, code))
     spans: dict[int, list[float]] = {}  # from every phone, even one DTW squeezed to nothing
     for p, o in zip(phones, owner, strict=True):
         if o >= 0:

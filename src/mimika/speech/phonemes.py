@@ -113,6 +113,12 @@ def espeak_inventory(lang: str) -> dict[str, tuple[int, int]]:
     return {}
 
 
+def is_stop(symbol: str, lang: str) -> bool:
+    """Whether an espeak-ng mnemonic is a stop or affricate in ``lang`` (stress marks
+    ignored): a sound that begins with a silent closure."""
+    return espeak_inventory(lang).get(strip_stress(symbol)[0], (-1, 0))[0] in (4, 5)
+
+
 def _lang_overrides(lang: str) -> dict[str, Any]:
     table = phoneme_table()["languages"]
     out: dict[str, Any] = {}

@@ -10,7 +10,7 @@ in the silence around an utterance do not start it.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -25,6 +25,8 @@ RANGE_DB = 45.0
 EDGE_WINDOW = 0.15
 #: silent closure allowed before the first sound of a word after a pause (a stop's closure)
 CLOSURE = 0.05
+#: the same for a word that starts with another sound: its first frames are weak (s)
+ONSET = 0.025
 
 
 def frame_energy(audio: np.ndarray, *, sr: int, hop: float = HOP) -> np.ndarray:
@@ -68,12 +70,15 @@ def speech_span(act: np.ndarray, *, hop: float = HOP) -> tuple[float, float] | N
 
 
 def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
-                 window: float = EDGE_WINDOW, closure: float = CLOSURE) -> list[Phone]:
+                 window: float = EDGE_WINDOW, closure: float = CLOSURE,
+                 is_stop: Callable[[str], bool] | None = None) -> list[Phone]:
     """Move the boundaries between pauses and speech to where the energy starts and stops,
     earlier or later.
 
-    After a pause (or at the start of the recording), a word begins ``closure`` s before its
-    first active frame after the pause began (a stop's silent closure), at most 2·``window``
+    After a pause (or at the start of the recording), a word begins at its first active frame
+    after the pause began — ``closure`` s before it when the word starts with a stop (its
+    silent closure; every word when ``is_stop`` is not given), :data:`ONSET` s before it
+    otherwise, at most 2·``window``
     from where it was; before a pause (or the end), a word lasts until its last active frame
     before the pause ends, at most ``window`` from where it was. A phone keeps at least 30 ms.
     Returns as many phones as given, in the same order; a zero-length pause at either end
@@ -96,8 +101,8 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
             on = np.flatnonzero(act[lo:frame(b.end + window)])
             if not len(on):
                 continue
-            new = float(np.clip((lo + on[0]) * hop - closure, t - 2 * window,
-                                t + 2 * window))
+            c = closure if is_stop is None or is_stop(b.symbol) else ONSET
+            new = float(np.clip((lo + on[0]) * hop - c, t - 2 * window, t + 2 * window))
         else:  # speech stops: the last sound before the pause ends
             lo = frame(a.start - window)
             on = np.flatnonzero(act[lo:frame(min(b.end, t + window))])
