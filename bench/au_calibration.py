@@ -6,7 +6,7 @@ on the four preset characters and the built-in head, each divided by the ICT Fac
 (light-stage scans of a real actor). Calibrated: both ratios in 0.7–1.4 (FACS exceptions, where
 the extent is not compared, are marked "–"). Then how the motion is shaped: per AU and head
 the landmark shape error against ICT (0: the 68 landmarks move as ICT's do; 1: as far off as
-not moving at all)::
+not moving at all); and how far the lid AUs open or narrow the eyes, against ICT's::
 
     MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/au_calibration.py [--markdown]
 """
@@ -22,7 +22,14 @@ HEADS = ("amara", "daniel", "mei", "tomas", "builtin")
 
 
 def main(argv: list[str] | None = None) -> int:
-    from mimika.face.calibration import EXTRA_AUS, SEED_AUS, TOLERANCE, au_motion, ratios
+    from mimika.face.calibration import (
+        EXTRA_AUS,
+        SEED_AUS,
+        TOLERANCE,
+        au_motion,
+        lid_motion,
+        ratios,
+    )
     from mimika.face.heads import load_head
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -64,6 +71,16 @@ def main(argv: list[str] | None = None) -> int:
         cells = [f"{shapes[h][c]:.2f}" if c in shapes[h] else "n/a" for h in heads]
         print(f"| {c} | " + " | ".join(cells) + " |" if md else
               f"{c:5s}              " + "  ".join(f"{x:>7s}" for x in cells))
+    ref_lids = lid_motion(ict)
+    lids = {h: lid_motion(rigs[h]) for h in heads}
+    print(("\n| AU | ICT eye opening (% IOD) | " + " | ".join(heads) + " |\n|"
+           + "---|" * (len(heads) + 2)) if md else
+          f"\n{'AU':5s} {'eye opening':>12s}  " + "  ".join(f"{h:>7s}" for h in heads))
+    for c, r in ref_lids.items():
+        cells = [f"{lids[h][c] / r:.2f}" + ("" if lo <= lids[h][c] / r <= hi else " ✗")
+                 if c in lids[h] else "n/a" for h in heads]
+        print(f"| {c} | {100 * r:+.1f} | " + " | ".join(cells) + " |" if md else
+              f"{c:5s} {100 * r:+11.1f}%  " + "  ".join(f"{x:>7s}" for x in cells))
     return 0
 
 

@@ -181,6 +181,23 @@ def test_every_seed_au_is_calibrated_against_ict(ict_rig):
                 assert x is None or lo <= x <= hi, f"{name} {code} {what} {x:.2f} × ICT"
 
 
+@needs_ict
+def test_the_lids_close_as_far_as_icts(ict_rig):
+    """A smile narrows the eyes, a glare widens them: the lid AUs change the characters' eye
+    openings as much as the real actor's (the built-in head's are listed in docs/rigs.md)."""
+    from mimika.face.calibration import LID_AUS, TOLERANCE, lid_motion
+    from mimika.face.heads import load_head
+
+    ref = lid_motion(ict_rig)
+    assert ref["AU05"] > 0.03 and all(ref[c] < -0.015 for c in ("AU06", "AU07", "AU09"))
+    lo, hi = TOLERANCE
+    for name in ("amara", "daniel", "mei", "tomas"):
+        got = lid_motion(load_head(name)[1])
+        assert set(got) == set(LID_AUS)
+        for code, x in got.items():
+            assert lo <= x / ref[code] <= hi, f"{name} {code} {x / ref[code]:.2f} × ICT"
+
+
 def test_glb_carries_the_mouth_shading_and_face_units(tmp_path, character_rig):
     from mimika.io.gltf import write_gltf
     from mimika.render.appearance import export_appearance

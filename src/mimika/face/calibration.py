@@ -15,7 +15,11 @@ How the motion is *shaped* — which way the lip corners, lids, brows and nose g
 the 68 landmarks: :func:`shape_error` is the length of the difference between a head's and the
 reference's landmark displacements (IOD units, 3-D) over the length of the reference's.
 
-A head is calibrated when, AU by AU, both lie within :data:`TOLERANCE` of the reference's
+How far the lids close is a third figure: the eye opening is small, so an AU can move the
+face as far as ICT's and still leave the eyes as wide (a smile without its narrowed eyes).
+:func:`lid_motion` is the change of the eye opening (upper to lower lid landmarks) in IOD.
+
+A head is calibrated when, AU by AU, these lie within :data:`TOLERANCE` of the reference's
 (``bench/au_calibration.py`` prints the table; docs/rigs.md#calibration lists it).
 """
 
@@ -28,8 +32,9 @@ import numpy as np
 
 from mimika.face.head import Head
 
-__all__ = ["EXCEPTIONS", "EXTRA_AUS", "SEED_AUS", "TOLERANCE", "FaceFront", "au_motion",
-           "face_front", "landmark_motion", "motion", "ratios", "shape_error"]
+__all__ = ["EXCEPTIONS", "EXTRA_AUS", "LID_AUS", "SEED_AUS", "TOLERANCE", "FaceFront",
+           "au_motion", "eye_opening", "face_front", "landmark_motion", "lid_motion", "motion",
+           "ratios", "shape_error"]
 
 #: the 22 AUs of seed 002 that move the face (its head and eye turns are rotations)
 SEED_AUS = ("AU01", "AU02", "AU04", "AU05", "AU06", "AU07", "AU09", "AU10", "AU12", "AU15",
@@ -50,6 +55,14 @@ EXCEPTIONS: Mapping[str, tuple[tuple[str, ...], str]] = {
     "AU45": (("peak", "extent"), "blink: the lids meet, however wide the eye is open"),
     "AU46": (("peak", "extent"), "wink: one eye's lids meet"),
 }
+
+
+#: the AUs whose change of the eye opening is compared: on ICT the lid raiser opens the eyes
+#: by 4 % IOD, the cheek raiser, lid tightener and nose wrinkler narrow them by 2–4 % (the
+#: closures 43/45/46 close them whatever their size; other AUs move the lids < 1 %)
+LID_AUS = ("AU05", "AU06", "AU07", "AU09")
+#: 68-point landmark pairs (upper lid, lower lid) across the eye openings
+LID_PAIRS = ((37, 41), (38, 40), (43, 47), (44, 46))
 
 
 @dataclass(frozen=True)
@@ -114,6 +127,24 @@ def shape_error(moved: np.ndarray, reference: np.ndarray) -> float:
     difference's length over the reference's (0: the same motion; 1: as far off as no
     motion at all)."""
     return float(np.linalg.norm(moved - reference) / max(np.linalg.norm(reference), 1e-12))
+
+
+def eye_opening(landmarks: np.ndarray) -> float:
+    """Mean height of the eye openings: upper minus lower lid landmark, along the head's up
+    axis (y), of landmark positions (68, 3) — or of their displacements, for its change."""
+    lm = np.asarray(landmarks, np.float64)
+    return float(np.mean([lm[u, 1] - lm[lo, 1] for u, lo in LID_PAIRS]))
+
+
+def lid_motion(rig, codes: Iterable[str] = LID_AUS) -> dict[str, float]:
+    """How far each AU of ``codes`` the rig models, at intensity 1, opens (+) or narrows (−)
+    the eyes, in IOD (:func:`eye_opening` of the landmark displacements)."""
+    head = rig.head
+    o = head.landmark_object
+    rest = head.rest[o].astype(np.float64)
+    return {code: eye_opening(landmark_motion(
+                np.asarray(rig.deform({code: 1.0})[o], np.float64) - rest, head))
+            for code in codes if code in rig.supported}
 
 
 def au_motion(rig, codes: Iterable[str] = SEED_AUS) -> dict[str, tuple[float, float]]:

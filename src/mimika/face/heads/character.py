@@ -59,7 +59,7 @@ def _landmark_ids(skin_weld: np.ndarray) -> np.ndarray:
 
 #: shapes of an AU recipe that stay MakeHuman's when the AU is mixed with the ict style: the
 #: jaw (it carries the teeth and tongue, which the generated shapes leave still) and the lids
-_NATIVE = ("jaw", "eyeBlink", "eyeLook")
+_NATIVE = ("jaw", "eyeBlink", "eyeLook", "eyeSquint", "eyeWide")
 
 
 def calibrated_table(table: Mapping, calibration: Mapping[str, Mapping] | None = None) -> dict:
