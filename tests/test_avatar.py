@@ -118,7 +118,7 @@ def _round_trip(rig, path, lids: float = 0.0):
 
 
 def test_builtin_export_round_trip(builtin_small, builtin_glb):
-    _round_trip(builtin_small, builtin_glb, lids=0.03)
+    _round_trip(builtin_small, builtin_glb, lids=0.04)  # its nose wrinkler lifts the lower lids too
     head, _ = load_head(builtin_glb)
     cover = head.meta["coverage"]
     assert cover["AU12"][0] == "facs" and cover["AU51"][0] == "rotation"
