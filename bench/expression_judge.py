@@ -15,6 +15,11 @@ a real actor (skipped without ``MIMIKA_ICT_DIR``)::
     bash scripts/setup-judge.sh
     .venv/bin/python bench/expression_judge.py                       # presets + builtin
     .venv/bin/python bench/expression_judge.py --heads amara --views front --out out/judge
+    .venv/bin/python bench/expression_judge.py --try fear-variants.json --as fear
+
+``--try`` judges other AU combinations for one class instead of the library's: a JSON file
+of ``{"label": {"AU01": 1.0, …}, …}``, each scaled by every intensity, rendered on every head
+and view and counted as recognised when the recogniser's top class is ``--as``'s.
 
 Targets (issue 25): per head and view, at intensity 1.0, at least 6 of the 7 recognised, and
 happiness also at 0.6; landmark measures within 0.7–1.4 of ICT's.
@@ -152,6 +157,38 @@ def summary(name: str, res: dict) -> str:
     return f"{name:8s} " + "; ".join(parts)
 
 
+def try_variants(variants: dict[str, dict[str, float]], expression: str, heads, views,
+                 intensities, size, out: Path) -> None:
+    """Print, per variant, intensity and recogniser, how many head × view renders read as
+    ``expression`` (and each render's top class and the intended class's probability)."""
+    from mimika.face.heads import load_head
+    from mimika.render import Renderer, save_png
+
+    jobs = []
+    for h in heads:
+        _, rig = load_head(h)
+        with Renderer(rig.head, size=size, samples=4) as r:
+            for view in views:
+                for label, aus in variants.items():
+                    for k in intensities:
+                        vals = rig.check({au: v * k for au, v in aus.items()})
+                        path = out / f"{h}_{view}_{label}_{k:g}.png".replace("/", "-")
+                        jobs.append((h, view, label, k, save_png(
+                            r.render(rig.deform(vals), view=view, aus=vals), path)))
+    want = CLASSES[expression]
+    for which in JUDGES:
+        verdicts = judge([j[4] for j in jobs], which)
+        rows: dict = {}
+        for (h, view, label, k, _), v in zip(jobs, verdicts, strict=True):
+            ex = v.get("expressions", {})
+            top = max(ex, key=ex.get) if ex else "no face"
+            rows.setdefault((label, k), []).append(
+                f"{h[:5]}/{view[0]}:{top[:5]}{'✓' if top == want else '✗'}{ex.get(want, 0):.2f}")
+        for (label, k), cells in rows.items():
+            ok = sum("✓" in c for c in cells)
+            print(f"{label:16s} {k:4.1f} {which:8s} {ok:2d}/{len(cells)}  {' '.join(cells)}")
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--heads", default=",".join(HEADS))
@@ -159,10 +196,25 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--intensities", default="1.0,0.6")
     p.add_argument("--size", default="512x512")
     p.add_argument("--out", type=Path, help="keep the renders and results.json here")
+    p.add_argument("--try", dest="variants", type=Path,
+                   help="JSON of {label: {AU: value}}: judge these instead of the library")
+    p.add_argument("--as", dest="expression", choices=list(CLASSES),
+                   help="the expression --try's variants are meant to show")
     a = p.parse_args(argv)
     size = tuple(int(s) for s in a.size.split("x"))
     views, heads = a.views.split(","), a.heads.split(",")
     ks = [float(k) for k in a.intensities.split(",")]
+    if a.variants is not None:
+        if a.expression is None:
+            p.error("--try needs --as EXPRESSION: the expression its variants are meant to show")
+        if os.environ.get("MIMIKA_ICT_DIR"):
+            heads = ["ict", *heads]
+        with tempfile.TemporaryDirectory(prefix="mimika-judge-") as d:
+            out = a.out or Path(d)
+            out.mkdir(parents=True, exist_ok=True)
+            try_variants(json.loads(a.variants.read_text()), a.expression, heads, views, ks,
+                         size, out)
+        return 0
     tmp = None
     if a.out is None:
         tmp = tempfile.TemporaryDirectory(prefix="mimika-judge-")
