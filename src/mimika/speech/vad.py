@@ -78,9 +78,9 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
     After a pause (or at the start of the recording), a word begins at its first active frame
     after the pause began — ``closure`` s before it when the word starts with a stop (its
     silent closure; every word when ``is_stop`` is not given), :data:`ONSET` s before it
-    otherwise, at most 2·``window``
-    from where it was; before a pause (or the end), a word lasts until its last active frame
-    before the pause ends, at most ``window`` from where it was. A phone keeps at least 30 ms.
+    otherwise — at most 2·``window`` from where it was; before a pause (or the end), a word
+    lasts until its last active frame before the pause ends, at most ``window`` from where it
+    was. A phone keeps at least 30 ms.
     Returns as many phones as given, in the same order; a zero-length pause at either end
     (see :func:`pad`) lets the first and last word move too.
     """

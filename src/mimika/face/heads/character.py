@@ -59,6 +59,8 @@ def _landmark_ids(skin_weld: np.ndarray) -> np.ndarray:
 
 #: shapes of an AU recipe that stay MakeHuman's when the AU is mixed with the ict style: the
 #: jaw (it carries the teeth and tongue, which the generated shapes leave still) and the lids
+#: (blink, squint, wide: the generated shapes are too smooth to move a lid, see
+#: docs/rigs.md#calibration)
 _NATIVE = ("jaw", "eyeBlink", "eyeLook", "eyeSquint", "eyeWide")
 
 
