@@ -67,6 +67,12 @@ def judge(files: list[Path], which: str = "face-api") -> list[dict]:
     return [json.loads(line) for line in out.splitlines() if line.strip()]
 
 
+def top_class(verdict: dict) -> str:
+    """A recogniser's most probable class for one image ("no face" when it found none)."""
+    ex = verdict.get("expressions", {})
+    return max(ex, key=ex.get) if ex else "no face"
+
+
 def _iod(lm: np.ndarray) -> float:
     return float(np.linalg.norm(lm[36:42].mean(0) - lm[42:48].mean(0)))
 
@@ -110,10 +116,9 @@ def run_head(name: str, views, intensities, size, out: Path) -> dict:
         rows, rest = [], {}
         for (view, k, what, _), v in zip(jobs, verdicts, strict=True):
             if k is not None:
-                ex = v.get("expressions", {})
-                top = max(ex, key=ex.get) if ex else "no face"
+                top = top_class(v)
                 rows.append({"view": view, "intensity": k, "expression": what, "top": top,
-                             "p": ex.get(CLASSES[what], 0.0)})
+                             "p": v.get("expressions", {}).get(CLASSES[what], 0.0)})
                 if what == "neutral" and "landmarks" in v:
                     rest[view] = np.asarray(v["landmarks"])
             elif "landmarks" in v and view in rest:
@@ -180,10 +185,9 @@ def try_variants(variants: dict[str, dict[str, float]], expression: str, heads, 
         verdicts = judge([j[4] for j in jobs], which)
         rows: dict = {}
         for (h, view, label, k, _), v in zip(jobs, verdicts, strict=True):
-            ex = v.get("expressions", {})
-            top = max(ex, key=ex.get) if ex else "no face"
+            top, p = top_class(v), v.get("expressions", {}).get(want, 0.0)
             rows.setdefault((label, k), []).append(
-                f"{h[:5]}/{view[0]}:{top[:5]}{'✓' if top == want else '✗'}{ex.get(want, 0):.2f}")
+                f"{h[:5]}/{view[0]}:{top[:5]}{'✓' if top == want else '✗'}{p:.2f}")
         for (label, k), cells in rows.items():
             ok = sum("✓" in c for c in cells)
             print(f"{label:16s} {k:4.1f} {which:8s} {ok:2d}/{len(cells)}  {' '.join(cells)}")

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -124,14 +125,20 @@ def mfcc_features(mel: np.ndarray, *, n_mfcc: int = 13) -> np.ndarray:
     return f.astype(np.float32)
 
 
-def _match_noise(ref: np.ndarray, rec: np.ndarray) -> np.ndarray:
-    """Level-match the reference mel power to the recording and add its noise floor."""
+def _noise_and_level(rec: np.ndarray) -> tuple[np.ndarray, float]:
+    """The recording's mel noise floor (10th percentile per band) and its speech level above
+    it (mean power of the louder half of its frames), for :func:`_match_noise`."""
     noise = np.percentile(rec, 10, axis=0)
-    e_rec, e_ref = rec.sum(axis=1), ref.sum(axis=1)
-    top_rec = e_rec >= np.percentile(e_rec, 50)
+    e_rec = rec.sum(axis=1)
+    return noise, float(e_rec[e_rec >= np.percentile(e_rec, 50)].mean() - noise.sum())
+
+
+def _match_noise(ref: np.ndarray, noise: np.ndarray, level: float) -> np.ndarray:
+    """Level-match the reference mel power to the recording's ``level`` and add its
+    ``noise`` floor (:func:`_noise_and_level`)."""
+    e_ref = ref.sum(axis=1)
     top_ref = e_ref >= np.percentile(e_ref, 50)
-    gain = max(float(e_rec[top_rec].mean() - noise.sum()), 1e-12) / max(
-        float(e_ref[top_ref].mean()), 1e-12)
+    gain = max(level, 1e-12) / max(float(e_ref[top_ref].mean()), 1e-12)
     out = gain * ref
     out += noise[None, :]
     return out
@@ -150,64 +157,72 @@ PAUSE_REACH = 0.5
 
 
 def _dtw_phones(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice: str | None,
-                act: np.ndarray) -> tuple[list[Phone], list[int], float]:
+                act: np.ndarray, raw: np.ndarray) -> tuple[list[Phone], list[int], float]:
     """espeak's phones of ``transcript`` warped onto the speech part of the recording, the
     token index of each (see :func:`~mimika.speech.words.assign_phones`) and the path cost.
+    ``act``: the recording's sustained activity, ``raw``: its frames above the threshold
+    (:func:`mimika.speech.vad.activity` with and without ``min_run``).
 
     espeak pauses at sentence ends and breaks only; where the speaker paused elsewhere, the
     warp would stretch the words next to it over the silence — so the reference gets the
     speaker's pauses (silence spliced in at the nearest word boundary) and is warped again.
     """
     from mimika.speech.tts import synthesize
-    from mimika.speech.vad import activity
     from mimika.speech.words import assign_phones
 
     ref = synthesize(transcript, lang=lang, voice=voice, engine="espeak")
-    ref_audio, ref_phones = ref.audio, list(ref.phonemes)
-    phones, cost = _warp_phones(a, sr, ref_audio, ref.sr, ref_phones, act)
+    rec = _Recording(a, sr, act)
+    phones, cost = rec.warp(ref.audio, ref.sr, ref.phonemes)
     owner = assign_phones(phones, toks, lang=lang)
-    runs = _quiet_runs(act)
-    if runs:  # every frame quiet: two stop closures around a short word are no pause
-        runs = _quiet_runs(activity(a, sr=sr, min_run=0.0))
-    cuts = _speaker_pauses(phones, owner, runs)
+    # every frame quiet: two stop closures around a short word are no pause
+    cuts = _speaker_pauses(phones, owner, _quiet_runs(raw) if _quiet_runs(act) else [])
     if cuts:
-        ref_audio, ref_phones = _splice_pauses(ref_audio, ref.sr, ref_phones, cuts)
-        phones, cost = _warp_phones(a, sr, ref_audio, ref.sr, ref_phones, act)
+        audio, ref_phones = _splice_pauses(ref.audio, ref.sr, ref.phonemes, cuts)
+        phones, cost = rec.warp(audio, ref.sr, ref_phones)
         owner = assign_phones(phones, toks, lang=lang)
     return phones, owner, cost
 
 
-def _warp_phones(a: np.ndarray, sr: int, ref_audio: np.ndarray, ref_sr: int,
-                 ref_phones: list[Phone], act: np.ndarray) -> tuple[list[Phone], float]:
-    """The reference's phones mapped onto the recording by DTW of their features."""
-    from mimika.speech.vad import activity, speech_span
+class _Recording:
+    """The speech part of a recording (± :data:`MARGIN`) as DTW features, to warp
+    references onto."""
 
-    dur = len(a) / sr
-    span = speech_span(act) or (0.0, dur)
-    c0, c1 = max(0.0, span[0] - MARGIN), min(dur, span[1] + MARGIN)
-    rec = a[int(c0 * sr):round(c1 * sr)]
-    ref_dur = len(ref_audio) / ref_sr
-    rspan = speech_span(activity(ref_audio, sr=ref_sr)) or (0.0, ref_dur)
-    r0, r1 = max(0.0, rspan[0] - MARGIN), min(ref_dur, rspan[1] + MARGIN)
-    ref_mel = mel_power(ref_audio[int(r0 * ref_sr):round(r1 * ref_sr)], sr=ref_sr)
-    rec_mel = mel_power(rec, sr=sr)
-    x = mfcc_features(_match_noise(ref_mel, rec_mel))
-    del ref_mel
-    y = mfcc_features(rec_mel)
-    del rec_mel
-    path = warp(x, y, hop=HOP)
-    cost = float(np.sqrt(((x[path[:, 0]] - y[path[:, 1]]) ** 2).sum(axis=1)).mean())
-    knots_ref, knots_rec = time_map(path, hop=HOP)
+    def __init__(self, a: np.ndarray, sr: int, act: np.ndarray) -> None:
+        from mimika.speech.vad import speech_span
 
-    def mp(t: float) -> float:
-        return float(np.clip(c0 + np.interp(t - r0, knots_ref, knots_rec), 0.0, dur))
+        self.dur = len(a) / sr
+        span = speech_span(act) or (0.0, self.dur)
+        self.c0, c1 = max(0.0, span[0] - MARGIN), min(self.dur, span[1] + MARGIN)
+        mel = mel_power(a[int(self.c0 * sr):round(c1 * sr)], sr=sr)
+        self.noise, self.level = _noise_and_level(mel)
+        self.y = mfcc_features(mel)
 
-    phones: list[Phone] = []
-    for k, p in enumerate(ref_phones):
-        s = 0.0 if k == 0 else phones[-1].end
-        e = dur if k == len(ref_phones) - 1 else max(mp(p.end), s)
-        phones.append(Phone(p.symbol, s, e, p.stress))
-    return phones, cost
+    def warp(self, ref_audio: np.ndarray, ref_sr: int, ref_phones: Sequence[Phone],
+             ) -> tuple[list[Phone], float]:
+        """The reference's phones mapped onto the recording, and the path cost."""
+        from mimika.speech.vad import activity, speech_span
+
+        ref_dur = len(ref_audio) / ref_sr
+        rspan = speech_span(activity(ref_audio, sr=ref_sr)) or (0.0, ref_dur)
+        r0, r1 = max(0.0, rspan[0] - MARGIN), min(ref_dur, rspan[1] + MARGIN)
+        x = mfcc_features(_match_noise(
+            mel_power(ref_audio[int(r0 * ref_sr):round(r1 * ref_sr)], sr=ref_sr),
+            self.noise, self.level))
+        y = self.y
+        path = warp(x, y, hop=HOP)
+        cost = float(np.sqrt(((x[path[:, 0]] - y[path[:, 1]]) ** 2).sum(axis=1)).mean())
+        knots_ref, knots_rec = time_map(path, hop=HOP)
+
+        def mp(t: float) -> float:
+            return float(np.clip(self.c0 + np.interp(t - r0, knots_ref, knots_rec), 0.0,
+                                 self.dur))
+
+        phones: list[Phone] = []
+        for k, p in enumerate(ref_phones):
+            s = 0.0 if k == 0 else phones[-1].end
+            e = self.dur if k == len(ref_phones) - 1 else max(mp(p.end), s)
+            phones.append(Phone(p.symbol, s, e, p.stress))
+        return phones, cost
 
 
 def _quiet_runs(act: np.ndarray) -> list[tuple[float, float]]:
@@ -254,7 +269,7 @@ def _speaker_pauses(phones: list[Phone], owner: list[int], runs: list[tuple[floa
     return sorted(out.items())
 
 
-def _splice_pauses(audio: np.ndarray, sr: int, phones: list[Phone],
+def _splice_pauses(audio: np.ndarray, sr: int, phones: Sequence[Phone],
                    cuts: list[tuple[int, float]]) -> tuple[np.ndarray, list[Phone]]:
     """The reference with ``seconds`` of silence before each phone index of ``cuts`` (a pause
     phone already there grows instead); phone times move with it."""
@@ -329,7 +344,8 @@ def _word_spans(phones: list[Phone], owner: list[int], n: int) -> np.ndarray:
 
 
 def _sphinx_long(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice: str | None,
-                 act: np.ndarray, *, strict: bool) -> tuple[list[Phone], list[int], dict]:
+                 act: np.ndarray, raw: np.ndarray, *, strict: bool
+                 ) -> tuple[list[Phone], list[int], dict]:
     """pocketsphinx on a long recording, piece by piece (:mod:`mimika.speech.pieces`: cut at
     pauses found with a DTW alignment of the whole), so its memory stays bounded; a piece it
     cannot align keeps the DTW phones (``strict``: raises instead)."""
@@ -337,7 +353,8 @@ def _sphinx_long(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice
     from mimika.speech.vad import HOP as ACT_HOP
     from mimika.speech.words import as_read
 
-    dphones, downer, _ = _dtw_phones(a, sr, as_read(transcript), toks, lang, voice, act)
+    dphones, downer, _ = _dtw_phones(a, sr, as_read(transcript), toks, lang, voice, act,
+                                     raw)
     spans = _word_spans(dphones, downer, len(toks))
     cuts = [round(t * sr) for t in pieces.cut_times(spans, act, len(a) / sr)]
     bounds = [0, *cuts, len(a)]
@@ -391,7 +408,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     from mimika.speech import espeak, pieces, sphinx
     from mimika.speech.phonemes import is_stop
     from mimika.speech.tts import split_sentences
-    from mimika.speech.vad import activity, pad, refine_edges, unpad
+    from mimika.speech.vad import activity, pad, refine_edges, sustained, unpad
     from mimika.speech.words import Token, as_read, tokens
 
     if engine not in ENGINES:
@@ -406,14 +423,15 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
             for t in tokens(transcript)]
     if not toks:
         raise ParameterError("transcript has no words; give the words spoken in the recording")
-    act = activity(a, sr=sr)
+    raw = activity(a, sr=sr, min_run=0.0)  # every frame above the threshold
+    act = sustained(raw)
     use = engine if engine != "auto" else ("sphinx" if sphinx.serves(code) else "dtw")
     meta: dict = {"source": "alignment"}
     if use == "sphinx":
         try:
             if len(a) / sr > pieces.PIECE:
                 phones, owner, more = _sphinx_long(a, int(sr), transcript, toks, code, voice,
-                                                   act, strict=engine == "sphinx")
+                                                   act, raw, strict=engine == "sphinx")
                 meta.update(more)
             else:
                 phones, owner = _sphinx_phones(a, int(sr), toks, code, act)
@@ -424,7 +442,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
             use = "dtw"
     if use == "dtw":
         phones, owner, cost = _dtw_phones(a, int(sr), as_read(transcript), toks, code, voice,
-                                          act)
+                                          act, raw)
         meta["alignment_cost"] = round(cost, 4)
     phones, owner = pad(phones, owner)
     phones = refine_edges(phones, act, is_stop=lambda sym: is_stop(sym, code))

@@ -44,7 +44,11 @@ def activity(audio: np.ndarray, *, sr: int, hop: float = HOP, threshold: float =
     # the floor of the recording's own background: digital silence (padding, a muted
     # stretch) far below it must not make that background look like speech
     lo = np.percentile(e[e > hi - RANGE_DB], 10)
-    act = e > lo + threshold * (hi - lo)
+    return sustained(e > lo + threshold * (hi - lo), hop=hop, min_run=min_run)
+
+
+def sustained(act: np.ndarray, *, hop: float = HOP, min_run: float = MIN_RUN) -> np.ndarray:
+    """``act`` without its active runs shorter than ``min_run`` s."""
     n = max(1, round(min_run / hop))
     out = np.zeros_like(act)
     k = 0
