@@ -229,8 +229,9 @@ def _stop(pool: Any) -> None:
     for p in procs:
         with contextlib.suppress(Exception):
             p.join(2.0)
-            if p.is_alive():
+            if p.is_alive():  # still setting up after SIGTERM: killed, and reaped
                 p.kill()
+                p.join(2.0)
 
 
 def _owned(path: str) -> bool:
