@@ -127,3 +127,48 @@ def test_hairlines_show_no_light_skin_between_hair(presets, name):
     forehead = np.median(lum[fy - 3:fy + 4, fx - 3:fx + 4])
     light = gaps & (lum > 0.85 * forehead)
     assert light.sum() <= 25, f"{light.sum()} light skin pixels between hair"
+
+
+@pytest.mark.parametrize("name", ["amara", "mei"])
+def test_face_expressions_leave_the_chest_and_shoulders_still(presets, name):
+    """The face shapes generated from ICT's fields reached the body: a cheek raiser moved mei's
+    right shoulder 3.2 cm (her smile pushed skin through the neckline) and amara's chin raiser
+    reached 24 cm below her chin. Below the neck nothing moves."""
+    head, rig = presets[name]
+    lm = head.landmark_points()
+    face = np.linalg.norm(lm[27] - lm[8])
+    for aus in ({"AU06": 1.0, "AU12": 1.0}, {"AU17": 1.0, "AU20": 1.0}, {"AU26": 1.0}):
+        pos = rig.deform(aus)
+        for o in head.objects:
+            low = o.vertices[:, 1] < lm[8, 1] - face
+            moved = np.linalg.norm(pos[o.name][low] - o.vertices[low], axis=1)
+            assert not low.any() or moved.max() < 0.01, (aus, o.name, moved.max())
+
+
+def test_a_shrug_lifts_the_shoulders_and_leaves_the_arms_hanging(presets):
+    """A shrug swung the arms 8° out from the shoulders, pushing daniel's jacket sides through
+    his sleeves (912 px of crossing cloth in the news shot); now the shoulders rise and the
+    arms keep their direction."""
+    _, rig = presets["daniel"]
+    sk = rig.skinning
+    up, elbow = sk.names.index("upperarm01.L"), sk.names.index("lowerarm01.L")
+    zero = np.zeros((1, 3))
+    body = np.array([[1.0 if c == "body.shrug_l" else 0.0 for c in rig.body_channels]])
+    rest, shrug = rig.bone_transforms(zero, zero), rig.bone_transforms(zero, zero, body)
+
+    def arm(tf):
+        p = [tf[0, i, :, :3] @ sk.heads[i] + tf[0, i, :, 3] for i in (up, elbow)]
+        return p[0], (p[1] - p[0]) / np.linalg.norm(p[1] - p[0])
+
+    (s0, d0), (s1, d1) = arm(rest), arm(shrug)
+    assert s1[1] - s0[1] > 1.0  # the shoulder joint rises over a centimetre
+    assert np.degrees(np.arccos(np.clip(d0 @ d1, -1, 1))) < 1.0
+
+
+@pytest.mark.render
+def test_daniels_shrug_keeps_his_jacket_outside_his_sleeves(presets):
+    shrug = _check(*presets["daniel"], {"body.shrug_l": 1.0, "body.shrug_r": 1.0,
+                                        "body.breath": 1.0})
+    rest = _check(*presets["daniel"], {})
+    assert shrug["cloth_cross_px"] < rest["cloth_cross_px"] + 100
+    assert shrug["stretched_tris"] == 0

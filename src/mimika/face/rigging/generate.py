@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import json
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import replace
 from importlib import resources
 
@@ -36,6 +36,10 @@ ARKIT_SUMS = {"browInnerUp": ("browInnerUp_L", "browInnerUp_R"),
 #: along the mesh, a vertex within this of equally near both sides of a split (skin joining
 #: the lips or lids past the opening's end) takes both fields, blended (cm)
 SPLIT_BLEND_CM = 0.3
+#: below the chin the fields fade out between these depths, in chin → nose-bridge lengths:
+#: they were fitted on a head and neck, and evaluated on a body they reach the chest and
+#: shoulders (a cheek field moved a character's shoulder 3 cm, through her neckline)
+NECK_FADE = (0.4, 0.8)
 #: shape name → {object name: (N, 3) float32 deltas in cm}
 Shapes = dict[str, dict[str, np.ndarray]]
 
@@ -119,6 +123,22 @@ def _field_on(fs: FieldSet, field: LinearField | SplitField, upper: np.ndarray |
     return fs.to_head(out)
 
 
+def _neck_fade(head: Head) -> Callable[[np.ndarray], np.ndarray]:
+    """Weights (N,) for points (N, 3): 1 down to :data:`NECK_FADE`'s first depth below the
+    chin along the face's own up (chin → nose bridge), 0 past its second, smooth between."""
+    lm = head.landmark_points().astype(float)
+    up = lm[27] - lm[8]
+    h = float(np.linalg.norm(up))
+    up /= h
+
+    def weight(v: np.ndarray) -> np.ndarray:
+        depth = (lm[8] - v) @ up / h  # how far below the chin, in face lengths
+        t = np.clip((NECK_FADE[1] - depth) / (NECK_FADE[1] - NECK_FADE[0]), 0.0, 1.0)
+        return t * t * (3 - 2 * t)
+
+    return weight
+
+
 def _rigid(v: np.ndarray, d: np.ndarray) -> np.ndarray:
     """The displacement of the rigid motion that best matches ``d`` at points ``v``
     (Kabsch), so a tooth row or tongue moves as one piece."""
@@ -141,6 +161,7 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None, style: str =
     doc["shapes"] = full["shapes"]
     fs = shape_fields(doc, source=f"{style}_shape_fields.json")
     eps = 1e-4 / fs.scale  # 1 µm
+    fade = _neck_fade(head)
     upper = {}
     for sname, sp in fs.splits.items():
         for o in head.objects:
@@ -164,9 +185,10 @@ def generate_shapes(head: Head, names: Iterable[str] | None = None, style: str =
             if f is None:
                 continue
             w = None if isinstance(f, LinearField) else upper[f.split, o.name]
-            d = _field_on(fs, f, w, o.vertices.astype(float), eps)
+            v = o.vertices.astype(float)
+            d = _field_on(fs, f, w, v, eps) * fade(v)[:, None]
             if o.category != "face":  # teeth and tongue stay rigid: the best rigid motion
-                d = _rigid(o.vertices.astype(float), d)
+                d = _rigid(v, d)
             d = d.astype(np.float32)
             if np.abs(d).max() > 1e-6:
                 per[o.name] = d
