@@ -102,7 +102,9 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
     shirt through a jacket made the shirt the upper layer, then lifted it further). A lifted
     vertex carries the other layers lying up to ``stack`` above it (within ``width`` of its
     lift's line) with it, so lifting a shirt under a collar lifts the jacket over the shirt
-    too. ``spread`` rings of neighbours follow a lifted vertex, fading out.
+    too. ``spread`` rings of neighbours follow a lifted vertex, fading out. Of the
+    ``rounds``, the one that leaves the fewest crossings counts: at an armpit's fold a lift
+    can push a sleeve into the next panel, and later rounds made more than they cleared.
     """
     v = np.asarray(v, np.float64)
     move = np.zeros_like(v)
@@ -110,12 +112,15 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
     member = _island_of_vertex(tris, islands, n)
     key = np.arange(n)
     order: dict[tuple[int, int], int] = {}
-    for _ in range(rounds):
+    fewest, best = np.inf, move
+    for r in range(rounds + 1):
         cur = v + move
         i, j = intersecting_pairs(cur, tris, cur, tris, key_a=key, key_b=key)
         li, lj = islands[i], islands[j]
         cross = (li != lj) & (i < j)
-        if not cross.any():
+        if cross.sum() < fewest:
+            fewest, best = int(cross.sum()), move.copy()
+        if not cross.any() or r == rounds:
             break
         lift = np.zeros(n)
         direction = np.zeros((n, 3))
@@ -144,7 +149,7 @@ def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
         if not lift.any():
             break
         move += _spread(lift, direction, tris, n, spread)
-    return move
+    return best
 
 
 def _carried(v: np.ndarray, ids: np.ndarray, fn: np.ndarray, amount: np.ndarray,
