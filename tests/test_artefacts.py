@@ -88,9 +88,11 @@ def test_amaras_collar_is_whole(presets, pose):
 @pytest.mark.render
 @pytest.mark.parametrize("name", ["amara", "daniel", "mei", "tomas"])
 def test_no_skin_shows_through_clothes_or_between_hair_cards_at_rest(presets, name):
-    """mei's casual collar showed skin at rest (313 px); hairlines keep under 150 px of skin in
-    narrow gaps between the cards they show."""
+    """mei's casual collar showed skin at rest (313 px) and her sleeves crossed the top in the
+    armpits (535 px); hairlines keep under 150 px of skin in narrow gaps between the cards
+    they show. Only daniel's shirt-collar tips touch his jacket."""
     c = _check(*presets[name], {})
+    assert c["cloth_cross_px"] <= (100 if name == "daniel" else 0)
     assert c["skin_through_px"] <= 20
     assert c["hair_gap_px"] <= 150
     assert c["zfight_px"] <= 5
@@ -167,8 +169,8 @@ def test_a_shrug_lifts_the_shoulders_and_leaves_the_arms_hanging(presets):
 
 @pytest.mark.render
 def test_daniels_shrug_keeps_his_jacket_outside_his_sleeves(presets):
-    shrug = _check(*presets["daniel"], {"body.shrug_l": 1.0, "body.shrug_r": 1.0,
-                                        "body.breath": 1.0})
-    rest = _check(*presets["daniel"], {})
-    assert shrug["cloth_cross_px"] < rest["cloth_cross_px"] + 100
-    assert shrug["stretched_tris"] == 0
+    """At full strength with a deep breath (the idle's shrugs reach 0.3) the shrug showed 912
+    px of crossing cloth on daniel; what is left is the collar's tips and a fold at the tie."""
+    c = _check(*presets["daniel"], {"body.shrug_l": 1.0, "body.shrug_r": 1.0,
+                                    "body.breath": 1.0})
+    assert c["cloth_cross_px"] < 400 and c["skin_through_px"] == 0

