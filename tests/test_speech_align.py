@@ -66,6 +66,27 @@ def test_dtw_keeps_a_pause_the_speaker_made(lang, text, after):
     assert abs(resume.start - (w.start + gap)) <= 0.06
 
 
+@pytest.mark.parametrize("lang, text", [
+    ("pl", "Rada miasta obradowała w poniedziałek. Autobusy będą kursować częściej."),
+    ("de", "Der Stadtrat hat am Montag beraten. Busse sollen häufiger fahren.")])
+def test_dtw_aligns_speech_recorded_in_a_reverberant_room(lang, text):
+    """In a room with 0.5 s of reverberation every sound's tail fills the next: warped onto
+    espeak's dry rendition, phone boundaries were 17–19 ms off (median) and words slid; the
+    reference is now heard in the room that fits the recording best."""
+    rec = synthesize(text, lang=lang, voice="f3", rate=150)
+    rng = np.random.default_rng(3)
+    n = round(0.5 * rec.sr)
+    ir = rng.standard_normal(n) * np.exp(-6.9 * np.arange(n) / n)
+    ir[0] = 1.0
+    wet = np.convolve(rec.audio.astype(np.float64), 0.25 * ir)[:len(rec.audio)]
+    wet += rng.normal(0, 0.03 * wet.std(), len(wet))
+    est = align(wet.astype(np.float32), sr=rec.sr, transcript=text, lang=lang, engine="dtw")
+    words = np.abs([[a.start - b.start, a.end - b.end]
+                    for a, b in zip(rec.words, est.words, strict=True)])
+    assert np.median(_errors(rec, est)) <= 0.012
+    assert np.mean(words <= 0.05) >= 0.9
+
+
 def test_align_errors():
     with pytest.raises(ParameterError, match="transcript is empty"):
         align(np.zeros(22050, np.float32), sr=22050, transcript=" ")
