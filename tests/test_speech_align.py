@@ -66,25 +66,55 @@ def test_dtw_keeps_a_pause_the_speaker_made(lang, text, after):
     assert abs(resume.start - (w.start + gap)) <= 0.06
 
 
+def _in_a_room(audio: np.ndarray, sr: int, rt60: float, rng) -> np.ndarray:
+    """``audio`` as heard in a room (float64): the direct sound and a tail of noise that
+    decays 60 dB in ``rt60`` s, as `bench/bench_pauses.py` makes it."""
+    n = round(rt60 * sr)
+    ir = rng.standard_normal(n) * np.exp(-6.9 * np.arange(n) / n)
+    ir[0] = 1.0
+    return np.convolve(audio.astype(np.float64), 0.25 * ir)[:len(audio)]
+
+
 @pytest.mark.parametrize("lang, text", [
     ("pl", "Rada miasta obradowała w poniedziałek. Autobusy będą kursować częściej."),
     ("de", "Der Stadtrat hat am Montag beraten. Busse sollen häufiger fahren.")])
 def test_dtw_aligns_speech_recorded_in_a_reverberant_room(lang, text):
     """In a room with 0.5 s of reverberation every sound's tail fills the next: warped onto
-    espeak's dry rendition, phone boundaries were 17–19 ms off (median) and words slid; the
+    espeak's dry rendition, phone boundaries were 15–17 ms off (median) and words slid; the
     reference is now heard in the room that fits the recording best."""
     rec = synthesize(text, lang=lang, voice="f3", rate=150)
     rng = np.random.default_rng(3)
-    n = round(0.5 * rec.sr)
-    ir = rng.standard_normal(n) * np.exp(-6.9 * np.arange(n) / n)
-    ir[0] = 1.0
-    wet = np.convolve(rec.audio.astype(np.float64), 0.25 * ir)[:len(rec.audio)]
+    wet = _in_a_room(rec.audio, rec.sr, 0.5, rng)
     wet += rng.normal(0, 0.03 * wet.std(), len(wet))
     est = align(wet.astype(np.float32), sr=rec.sr, transcript=text, lang=lang, engine="dtw")
     words = np.abs([[a.start - b.start, a.end - b.end]
                     for a, b in zip(rec.words, est.words, strict=True)])
     assert np.median(_errors(rec, est)) <= 0.012
     assert np.mean(words <= 0.05) >= 0.9
+
+
+@pytest.mark.parametrize("lang, voice, doc", [
+    ("de", "m2", '<speak>Guten Abend, meine Damen und Herren. <break time="300ms"/> Zuerst das '
+                 'Wetter: Morgen wird es regnen.</speak>'),
+    ("pl", "f3", '<speak>Dobry wieczór państwu. <break time="400ms"/> Najpierw pogoda: jutro '
+                 'będzie padać, a potem wyjdzie słońce.</speak>')])
+def test_words_beside_pauses_keep_their_edges_in_a_reverberant_room(lang, voice, doc):
+    """A room's tail (0.4 s, with noise at 15 dB) kept the energy up after a word before a
+    pause: its end came 80–107 ms late. Words beside a pause now end and start within 70 ms."""
+    from mimika.speech.ssml import parse, plain_text
+
+    truth = synthesize(doc, lang=lang, ssml=True, voice=voice, rate=150)
+    rng = np.random.default_rng(0)
+    wet = _in_a_room(truth.audio, truth.sr, 0.4, rng)
+    p = float(np.mean(wet[np.abs(wet) > 1e-4 * np.abs(wet).max()] ** 2))
+    wet += rng.normal(0, np.sqrt(p / 10 ** 1.5), len(wet))
+    est = align(wet.astype(np.float32), sr=truth.sr, transcript=plain_text(parse(doc)),
+                lang=lang, engine="dtw")
+    pauses = [(q.start, q.end) for q in truth.phonemes if q.is_pause and q.duration >= 0.1]
+    near = [abs(s - t) for w, v in zip(truth.words, est.words, strict=True)
+            for t, s in ((w.start, v.start), (w.end, v.end))
+            if any(a - 1e-3 <= t <= b + 1e-3 for a, b in pauses)]
+    assert len(near) >= 4 and max(near) <= 0.07, np.round(near, 3)
 
 
 def test_align_errors():

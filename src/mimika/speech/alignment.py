@@ -152,6 +152,9 @@ ROOMS = (0.0, 0.2, 0.35, 0.5, 0.8)
 #: also with white noise at 20 and 10 dB SNR; espeak's voices), a room's tail holds it back
 #: (RT60 0.4 s: 190–220, 0.7 s: 140–190; 0.25 s: 230–310, half of it caught)
 DRY_FALL = -280.0
+#: in a reverberant recording a word before a pause ends at its last frame this far from the
+#: noise floor to the speech level (:func:`mimika.speech.vad.activity`; 0.3 elsewhere)
+ROOM_END_THRESHOLD = 0.6
 
 
 def fastest_fall(mel: np.ndarray, *, hop: float = HOP) -> float:
@@ -194,9 +197,11 @@ PAUSE_REACH = 0.5
 
 
 def _dtw_phones(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice: str | None,
-                act: np.ndarray, raw: np.ndarray) -> tuple[list[Phone], list[int], float]:
+                act: np.ndarray, raw: np.ndarray
+                ) -> tuple[list[Phone], list[int], float, float]:
     """espeak's phones of ``transcript`` warped onto the speech part of the recording, the
-    token index of each (see :func:`~mimika.speech.words.assign_phones`) and the path cost.
+    token index of each (see :func:`~mimika.speech.words.assign_phones`), the path cost and
+    the reverberation time of the room the recording was heard to be in (0: dry).
     ``act``: the recording's sustained activity, ``raw``: its frames above the threshold
     (:func:`mimika.speech.vad.activity` with and without ``min_run``).
 
@@ -217,7 +222,7 @@ def _dtw_phones(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice:
         audio, ref_phones = _splice_pauses(ref.audio, ref.sr, ref.phonemes, cuts)
         phones, cost = rec.warp(audio, ref.sr, ref_phones)
         owner = assign_phones(phones, toks, lang=lang)
-    return phones, owner, cost
+    return phones, owner, cost, rec.t60
 
 
 class _Recording:
@@ -410,8 +415,8 @@ def _sphinx_long(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice
     from mimika.speech.vad import HOP as ACT_HOP
     from mimika.speech.words import as_read
 
-    dphones, downer, _ = _dtw_phones(a, sr, as_read(transcript), toks, lang, voice, act,
-                                     raw)
+    dphones, downer, *_ = _dtw_phones(a, sr, as_read(transcript), toks, lang, voice, act,
+                                      raw)
     spans = _word_spans(dphones, downer, len(toks))
     cuts = [round(t * sr) for t in pieces.cut_times(spans, act, len(a) / sr)]
     bounds = [0, *cuts, len(a)]
@@ -484,6 +489,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     act = sustained(raw)
     use = engine if engine != "auto" else ("sphinx" if sphinx.serves(code) else "dtw")
     meta: dict = {"source": "alignment"}
+    room = 0.0  # the reverberation time DTW heard the recording in
     if use == "sphinx":
         try:
             if len(a) / sr > pieces.PIECE:
@@ -498,11 +504,14 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
             log.warning("%s; aligning by DTW instead", e)
             use = "dtw"
     if use == "dtw":
-        phones, owner, cost = _dtw_phones(a, int(sr), as_read(transcript), toks, code, voice,
-                                          act, raw)
+        phones, owner, cost, room = _dtw_phones(a, int(sr), as_read(transcript), toks, code,
+                                                voice, act, raw)
         meta["alignment_cost"] = round(cost, 4)
     phones, owner = pad(phones, owner)
-    phones = refine_edges(phones, act, is_stop=lambda sym: is_stop(sym, code))
+    # a room's tail holds the energy up after a sound ends: words before a pause end where
+    # it is still near the speech level
+    ends = activity(a, sr=sr, threshold=ROOM_END_THRESHOLD) if room else None
+    phones = refine_edges(phones, act, ends=ends, is_stop=lambda sym: is_stop(sym, code))
     spans: dict[int, list[float]] = {}  # from every phone, even one DTW squeezed to nothing
     for p, o in zip(phones, owner, strict=True):
         if o >= 0:

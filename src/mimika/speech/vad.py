@@ -27,6 +27,9 @@ EDGE_WINDOW = 0.15
 CLOSURE = 0.05
 #: the same for a word that starts with another sound: its first frames are weak (s)
 ONSET = 0.025
+#: ``refine_edges``'s ``ends`` apply before pauses at least this long (s): a short one may be
+#: a stop's closure after a weak word ending
+LONG_PAUSE = 0.15
 
 
 def frame_energy(audio: np.ndarray, *, sr: int, hop: float = HOP) -> np.ndarray:
@@ -75,7 +78,8 @@ def speech_span(act: np.ndarray, *, hop: float = HOP) -> tuple[float, float] | N
 
 def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
                  window: float = EDGE_WINDOW, closure: float = CLOSURE,
-                 is_stop: Callable[[str], bool] | None = None) -> list[Phone]:
+                 is_stop: Callable[[str], bool] | None = None,
+                 ends: np.ndarray | None = None) -> list[Phone]:
     """Move the boundaries between pauses and speech to where the energy starts and stops,
     earlier or later.
 
@@ -84,7 +88,9 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
     silent closure; every word when ``is_stop`` is not given), :data:`ONSET` s before it
     otherwise — at most 2·``window`` from where it was; before a pause (or the end), a word
     lasts until its last active frame before the pause ends, at most ``window`` from where it
-    was. A phone keeps at least 30 ms.
+    was; ``ends``: the activity those ends follow instead of ``act`` before a pause of at
+    least :data:`LONG_PAUSE` (a reverberant room's, at a higher threshold; the next word then
+    starts after the tail ``act`` still holds). A phone keeps at least 30 ms.
     Returns as many phones as given, in the same order; a zero-length pause at either end
     (see :func:`pad`) lets the first and last word move too.
     """
@@ -102,6 +108,12 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
         t = a.end
         if a.is_pause:  # speech starts: the first sound after the pause began
             lo = frame(max(a.start, t - 2 * window))
+            if ends is not None and a.end - phones[k - 1].start >= LONG_PAUSE:
+                # in a room: the previous word's tail is no onset
+                tail = frame(a.start)
+                while tail < frame(t) and act[tail]:
+                    tail += 1
+                lo = max(lo, tail)
             on = np.flatnonzero(act[lo:frame(b.end + window)])
             if not len(on):
                 continue
@@ -109,7 +121,8 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
             new = float(np.clip((lo + on[0]) * hop - c, t - 2 * window, t + 2 * window))
         else:  # speech stops: the last sound before the pause ends
             lo = frame(a.start - window)
-            on = np.flatnonzero(act[lo:frame(min(b.end, t + window))])
+            src = act if ends is None or b.end - b.start < LONG_PAUSE else ends
+            on = np.flatnonzero(src[lo:frame(min(b.end, t + window))])
             if not len(on):
                 continue
             new = float(np.clip((lo + on[-1] + 1) * hop, t - window, t + window))
