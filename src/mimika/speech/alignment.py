@@ -153,7 +153,7 @@ ROOMS = (0.0, 0.2, 0.35, 0.5, 0.8)
 #: (RT60 0.4 s: 190–220, 0.7 s: 140–190; 0.25 s: 230–310, half of it caught)
 DRY_FALL = -280.0
 #: in a reverberant recording a word before a pause ends at its last frame this far from the
-#: noise floor to the speech level (:func:`mimika.speech.vad.activity`; 0.3 elsewhere)
+#: noise floor to the speech level (:func:`mimika.speech.vad.above`; 0.3 elsewhere)
 ROOM_END_THRESHOLD = 0.6
 
 
@@ -203,7 +203,7 @@ def _dtw_phones(a: np.ndarray, sr: int, transcript: str, toks, lang: str, voice:
     token index of each (see :func:`~mimika.speech.words.assign_phones`), the path cost and
     the reverberation time of the room the recording was heard to be in (0: dry).
     ``act``: the recording's sustained activity, ``raw``: its frames above the threshold
-    (:func:`mimika.speech.vad.activity` with and without ``min_run``).
+    (:func:`mimika.speech.vad.above`; ``act`` is it :func:`~mimika.speech.vad.sustained`).
 
     espeak pauses at sentence ends and breaks only; where the speaker paused elsewhere, the
     warp would stretch the words next to it over the silence — so the reference gets the
@@ -246,12 +246,13 @@ class _Recording:
                  ) -> tuple[list[Phone], float]:
         """:meth:`warp`, in a reverberant recording first in each of :data:`ROOMS`: the one
         that fits best is kept (:attr:`t60`) for this and later warps."""
+        ref = self._reference(ref_audio, ref_sr)
         if not self.reverberant:
-            return self.warp(ref_audio, ref_sr, ref_phones)
+            return self._warp(*ref, ref_phones)
         best = None
         for t60 in ROOMS:
             self.t60 = t60
-            out = self.warp(ref_audio, ref_sr, ref_phones)
+            out = self._warp(*ref, ref_phones)
             if best is None or out[1] < best[1][1]:
                 best = (t60, out)
         self.t60 = best[0]
@@ -261,12 +262,20 @@ class _Recording:
     def warp(self, ref_audio: np.ndarray, ref_sr: int, ref_phones: Sequence[Phone],
              ) -> tuple[list[Phone], float]:
         """The reference's phones mapped onto the recording, and the path cost."""
+        return self._warp(*self._reference(ref_audio, ref_sr), ref_phones)
+
+    @staticmethod
+    def _reference(ref_audio: np.ndarray, ref_sr: int) -> tuple[np.ndarray, float]:
+        """The reference's speech part (± :data:`MARGIN`) as mel power, and where it starts."""
         from mimika.speech.vad import activity, speech_span
 
         ref_dur = len(ref_audio) / ref_sr
         rspan = speech_span(activity(ref_audio, sr=ref_sr)) or (0.0, ref_dur)
         r0, r1 = max(0.0, rspan[0] - MARGIN), min(ref_dur, rspan[1] + MARGIN)
-        ref_mel = mel_power(ref_audio[int(r0 * ref_sr):round(r1 * ref_sr)], sr=ref_sr)
+        return mel_power(ref_audio[int(r0 * ref_sr):round(r1 * ref_sr)], sr=ref_sr), r0
+
+    def _warp(self, ref_mel: np.ndarray, r0: float, ref_phones: Sequence[Phone]
+              ) -> tuple[list[Phone], float]:
         if self.t60 > 0:
             ref_mel = reverberate(ref_mel, self.t60)
         x = mfcc_features(_match_noise(ref_mel, self.noise, self.level))
@@ -470,7 +479,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     from mimika.speech import espeak, pieces, sphinx
     from mimika.speech.phonemes import is_stop
     from mimika.speech.tts import split_sentences
-    from mimika.speech.vad import activity, pad, refine_edges, sustained, unpad
+    from mimika.speech.vad import above, frame_energy, pad, refine_edges, sustained, unpad
     from mimika.speech.words import Token, as_read, tokens
 
     if engine not in ENGINES:
@@ -485,7 +494,8 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
             for t in tokens(transcript)]
     if not toks:
         raise ParameterError("transcript has no words; give the words spoken in the recording")
-    raw = activity(a, sr=sr, min_run=0.0)  # every frame above the threshold
+    energy = frame_energy(a, sr=sr)
+    raw = above(energy)  # every frame above the threshold
     act = sustained(raw)
     use = engine if engine != "auto" else ("sphinx" if sphinx.serves(code) else "dtw")
     meta: dict = {"source": "alignment"}
@@ -510,7 +520,7 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     phones, owner = pad(phones, owner)
     # a room's tail holds the energy up after a sound ends: words before a pause end where
     # it is still near the speech level
-    ends = activity(a, sr=sr, threshold=ROOM_END_THRESHOLD) if room else None
+    ends = sustained(above(energy, ROOM_END_THRESHOLD)) if room else None
     phones = refine_edges(phones, act, ends=ends, is_stop=lambda sym: is_stop(sym, code))
     spans: dict[int, list[float]] = {}  # from every phone, even one DTW squeezed to nothing
     for p, o in zip(phones, owner, strict=True):

@@ -42,12 +42,18 @@ def frame_energy(audio: np.ndarray, *, sr: int, hop: float = HOP) -> np.ndarray:
 def activity(audio: np.ndarray, *, sr: int, hop: float = HOP, threshold: float = THRESHOLD,
              min_run: float = MIN_RUN) -> np.ndarray:
     """Boolean speech activity per frame (runs shorter than ``min_run`` s removed)."""
-    e = frame_energy(audio, sr=sr, hop=hop)
+    return sustained(above(frame_energy(audio, sr=sr, hop=hop), threshold), hop=hop,
+                     min_run=min_run)
+
+
+def above(e: np.ndarray, threshold: float = THRESHOLD) -> np.ndarray:
+    """Frames of energy ``e`` (:func:`frame_energy`) more than ``threshold`` of the way from
+    the noise floor to the speech level."""
     hi = np.percentile(e, 95)
     # the floor of the recording's own background: digital silence (padding, a muted
     # stretch) far below it must not make that background look like speech
     lo = np.percentile(e[e > hi - RANGE_DB], 10)
-    return sustained(e > lo + threshold * (hi - lo), hop=hop, min_run=min_run)
+    return e > lo + threshold * (hi - lo)
 
 
 def sustained(act: np.ndarray, *, hop: float = HOP, min_run: float = MIN_RUN) -> np.ndarray:
