@@ -117,6 +117,24 @@ def test_words_beside_pauses_keep_their_edges_in_a_reverberant_room(lang, voice,
     assert len(near) >= 4 and max(near) <= 0.07, np.round(near, 3)
 
 
+@pytest.mark.parametrize("voice, word, pitch", [("f3", "Damen", 50), ("klatt", "regnen", 30)])
+def test_a_word_before_a_pause_ends_where_its_sound_ends(voice, word, pitch):
+    """Two voices other than the reference: f3 pauses 142 ms after "Damen" where espeak's
+    reference pauses 30 ms, and the word's end was moved onto "und"'s first sound inside that
+    pause (112 ms late); klatt ends "regnen" with a closure and a short, loud "-nen" after it,
+    too short to count as speech on its own (138 ms early). Both now within 50 ms."""
+    from mimika.speech.ssml import parse, plain_text
+
+    doc = ('<speak>Guten Abend, meine Damen und Herren. <break time="300ms"/> Zuerst das '
+           'Wetter: Morgen wird es regnen.</speak>')
+    rate = 150 if voice == "f3" else 175
+    truth = synthesize(doc, lang="de", ssml=True, voice=voice, rate=rate, pitch=pitch)
+    est = align(truth.audio, sr=truth.sr, transcript=plain_text(parse(doc)), lang="de",
+                engine="dtw")
+    k = [w.text for w in truth.words].index(word)
+    assert abs(est.words[k].end - truth.words[k].end) <= 0.05
+
+
 def test_align_errors():
     with pytest.raises(ParameterError, match="transcript is empty"):
         align(np.zeros(22050, np.float32), sr=22050, transcript=" ")

@@ -30,6 +30,11 @@ ONSET = 0.025
 #: ``refine_edges``'s ``ends`` apply before pauses at least this long (s): a short one may be
 #: a stop's closure after a weak word ending
 LONG_PAUSE = 0.15
+#: a silence this long before the end of a pause phone: what sounds after it is the next word
+NEXT_GAP = 0.1
+#: a burst this close after sustained sound belongs to it (s): a weak word ending's last
+#: syllable, too short to count on its own (German "regnen" after its /g/)
+TRAIL_GAP = 0.15
 
 
 def frame_energy(audio: np.ndarray, *, sr: int, hop: float = HOP) -> np.ndarray:
@@ -74,12 +79,41 @@ def sustained(act: np.ndarray, *, hop: float = HOP, min_run: float = MIN_RUN) ->
     return out
 
 
+def trailing(act: np.ndarray, raw: np.ndarray, *, hop: float = HOP, gap: float = TRAIL_GAP
+             ) -> np.ndarray:
+    """``act`` (sustained activity) extended by the bursts of ``raw`` (frames above the
+    threshold) that follow it within ``gap`` s of its last frame, chained."""
+    out = act.copy()
+    reach = round(gap / hop)
+    last = -reach - 1
+    for i in np.flatnonzero(act | raw):
+        if act[i]:
+            last = i
+        elif i - last <= reach:
+            out[last + 1:i + 1] = True
+            last = i
+    return out
+
+
 def speech_span(act: np.ndarray, *, hop: float = HOP) -> tuple[float, float] | None:
     """(start, end) in seconds of the first and last active frame; None when all is silent."""
     on = np.flatnonzero(act)
     if not len(on):
         return None
     return float(on[0] * hop), float((on[-1] + 1) * hop)
+
+
+def _next_word_at_end(seg: np.ndarray, gap: int) -> int | None:
+    """Where the last run of active frames starts in ``seg`` (a word's end up to the end of
+    the pause after it) when it reaches the segment's end after at least ``gap`` silent frames
+    — the next word's first sound, the pause mapped a little late; else None."""
+    on = np.flatnonzero(seg)
+    if not len(on) or on[-1] != len(seg) - 1:
+        return None
+    jumps = np.flatnonzero(np.diff(on) > 1)
+    if not len(jumps) or on[jumps[-1] + 1] - on[jumps[-1]] <= gap:
+        return None
+    return int(on[jumps[-1] + 1])
 
 
 def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
@@ -94,9 +128,11 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
     silent closure; every word when ``is_stop`` is not given), :data:`ONSET` s before it
     otherwise — at most 2·``window`` from where it was; before a pause (or the end), a word
     lasts until its last active frame before the pause ends, at most ``window`` from where it
-    was; ``ends``: the activity those ends follow instead of ``act`` before a pause of at
-    least :data:`LONG_PAUSE` (a reverberant room's, at a higher threshold; the next word then
-    starts after the tail ``act`` still holds). A phone keeps at least 30 ms.
+    was — but not onto a sound that begins after :data:`NEXT_GAP` s of silence at the pause's
+    end (the next word's); ``ends``: the activity those ends follow instead of ``act`` before
+    a pause of at least :data:`LONG_PAUSE` (a reverberant room's, at a higher threshold, the
+    next word then starting after the tail ``act`` still holds; a dry one's
+    :func:`trailing`). A phone keeps at least 30 ms.
     Returns as many phones as given, in the same order; a zero-length pause at either end
     (see :func:`pad`) lets the first and last word move too.
     """
@@ -128,10 +164,14 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
         else:  # speech stops: the last sound before the pause ends
             lo = frame(a.start - window)
             src = act if ends is None or b.end - b.start < LONG_PAUSE else ends
-            on = np.flatnonzero(src[lo:frame(min(b.end, t + window))])
+            seg = src[lo:frame(min(b.end, t + window))]
+            nxt = _next_word_at_end(seg, round(NEXT_GAP / hop))
+            on = np.flatnonzero(seg[:nxt])
             if not len(on):
                 continue
             new = float(np.clip((lo + on[-1] + 1) * hop, t - window, t + window))
+            if nxt is not None:  # the silence before the next word's sound: only later
+                new = max(new, t)
         lo_t, hi_t = a.start + keep, b.end - keep
         if b.end <= t:  # a zero-length end pause: only the word before it moves
             hi_t = t
