@@ -131,6 +131,45 @@ def test_hairlines_show_no_light_skin_between_hair(presets, name):
     assert light.sum() <= 25, f"{light.sum()} light skin pixels between hair"
 
 
+@pytest.mark.render
+def test_highlights_leave_light_hair_its_colour_and_dark_hair_its_sheen(presets, monkeypatch):
+    """The strands' white highlight greyed daniel's light-brown hair into a silver band along
+    the fringe's fold and under it (6 % of his hair's pixels lost over 30 % of their
+    saturation against the same hair drawn matte); it now weakens with the hair's brightness,
+    while mei's black hair keeps its sheen."""
+    from dataclasses import replace
+
+    from scipy import ndimage
+
+    from mimika.face.makehuman.artefacts import id_layers
+    from mimika.newsreader.pipeline import news_camera
+    from mimika.render import Renderer
+    from mimika.render.renderer import load_materials
+    from mimika.render.skin import SkinParams
+
+    def hair_pixels(name: str) -> np.ndarray:
+        head, _ = presets[name]
+        size = (1280, 720)
+        cam = news_camera(head, "front", 16 / 9)
+        objs = [o for o in head.objects if o.parts]
+        (front,) = id_layers([(o.vertices, o.faces) for o in objs], cam, size)
+        hair = front.obj == [o.name for o in objs].index("hair")
+        with Renderer(head, size, skin_shader=SkinParams(), lighting="news") as r:
+            img = r.render(None, camera=cam).astype(float) / 255
+        return img[ndimage.binary_erosion(hair, iterations=2)]
+
+    def saturation(px: np.ndarray) -> np.ndarray:
+        return (px.max(1) - px.min(1)) / np.maximum(px.max(1), 1e-3)
+
+    lit = {n: hair_pixels(n) for n in ("daniel", "mei")}
+    monkeypatch.setitem(load_materials(), "hair", replace(load_materials()["hair"], specular=0.0))
+    matte = {n: hair_pixels(n) for n in ("daniel", "mei")}
+    greyed = np.mean(saturation(lit["daniel"]) < 0.7 * saturation(matte["daniel"]))
+    assert greyed <= 0.01, f"{100 * greyed:.1f} % of daniel's hair greyed by its highlight"
+    lum = np.array([0.3, 0.59, 0.11])
+    assert np.mean(lit["mei"] @ lum) >= 2.0 * np.mean(matte["mei"] @ lum)
+
+
 @pytest.mark.parametrize("name", ["amara", "mei"])
 def test_face_expressions_leave_the_chest_and_shoulders_still(presets, name):
     """The face shapes generated from ICT's fields reached the body: a cheek raiser moved mei's

@@ -80,13 +80,16 @@ float strand_spec(vec3 t, vec3 n, vec3 h, float shift, float e) {
 }
 
 float strand_gloss = 1.0;  // strand brightness against the texture's mean (its last mip)
+// share of the white highlight: on light hair the light scattered inside the strands
+// outweighs it (a full one greyed daniel's light brown into a silver band); dark hair keeps it
+float sheen = 1.0;
 
 vec3 hair_specular(vec3 n, vec3 v, vec3 l, vec3 t) {
     vec3 h = normalize(l + v);
     float lit = smoothstep(0.0, 0.5, dot(n, l));
     float s1 = strand_spec(t, n, h, -0.1, u_shininess);
     float s2 = strand_spec(t, n, h, 0.15, 0.3 * u_shininess);
-    return u_specular * lit * strand_gloss * (vec3(s1) + 0.8 * s2 * sqrt(base));
+    return u_specular * lit * strand_gloss * (sheen * vec3(s1) + 0.8 * s2 * sqrt(base));
 }
 
 void main() {
@@ -114,6 +117,7 @@ void main() {
             vec3 mean = textureLod(u_tex, v_uv, 16.0).rgb;
             float ratio = dot(t.rgb, vec3(0.3, 0.5, 0.2)) / max(dot(mean, vec3(0.3, 0.5, 0.2)), 0.02);
             strand_gloss = clamp(ratio, 0.2, 2.0);
+            sheen = mix(1.0, 0.2, smoothstep(0.08, 0.3, dot(mean, vec3(0.3, 0.5, 0.2))));  // sRGB
         }
 #endif
     }
