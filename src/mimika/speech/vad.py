@@ -151,7 +151,7 @@ def refine_edges(phones: Sequence[Phone], act: np.ndarray, *, hop: float = HOP,
         if a.is_pause:  # speech starts: the first sound after the pause began
             lo = frame(max(a.start, t - 2 * window))
             if ends is not None and a.end - phones[k - 1].start >= LONG_PAUSE:
-                # in a room: the previous word's tail is no onset
+                # the previous word's last sound (in a room, its tail) is no onset
                 tail = frame(a.start)
                 while tail < frame(t) and act[tail]:
                     tail += 1

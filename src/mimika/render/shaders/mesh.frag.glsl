@@ -114,10 +114,9 @@ void main() {
             // hair thins out toward its silhouette (strand ends seen edge-on); highlights
             // follow the strands (brighter strands shine more)
             a *= smoothstep(0.03, 0.45, abs(dot(n, v)));
-            vec3 mean = textureLod(u_tex, v_uv, 16.0).rgb;
-            float ratio = dot(t.rgb, vec3(0.3, 0.5, 0.2)) / max(dot(mean, vec3(0.3, 0.5, 0.2)), 0.02);
-            strand_gloss = clamp(ratio, 0.2, 2.0);
-            sheen = mix(1.0, 0.2, smoothstep(0.08, 0.3, dot(mean, vec3(0.3, 0.5, 0.2))));  // sRGB
+            float mean = dot(textureLod(u_tex, v_uv, 16.0).rgb, vec3(0.3, 0.5, 0.2));  // sRGB
+            strand_gloss = clamp(dot(t.rgb, vec3(0.3, 0.5, 0.2)) / max(mean, 0.02), 0.2, 2.0);
+            sheen = mix(1.0, 0.2, smoothstep(0.08, 0.3, mean));
         }
 #endif
     }
