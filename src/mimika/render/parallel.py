@@ -229,9 +229,11 @@ def _stop(pool: Any) -> None:
     for p in procs:
         with contextlib.suppress(Exception):
             p.join(2.0)
-            if p.is_alive():  # still setting up after SIGTERM: killed, and reaped
+        if p.is_alive():  # still setting up after SIGTERM: killed, and reaped (a loaded
+            with contextlib.suppress(Exception):  # machine may take seconds to end it)
                 p.kill()
-                p.join(2.0)
+            with contextlib.suppress(Exception):
+                p.join(10.0)
 
 
 def _owned(path: str) -> bool:
