@@ -355,6 +355,37 @@ def test_character_glb_skinning_reproduces_the_rig(character):
         assert err < 0.01, f"{o.name}: {err:.3f} cm"
 
 
+def test_character_glb_releases_the_lips_as_the_rig_does(tmp_path, character):
+    """The lips the rest pose holds together part at once in the rig; the GLB carries that
+    as the ``lips_release`` morph whose animated weight follows the AUs, so its morphs at the
+    animated weights give the rig's own mouth (AU25 at 0.1: half released)."""
+    from pygltflib import GLTF2
+
+    from mimika.io.gltf import write_gltf
+    from mimika.tracks import AUTrack
+
+    _, rig = character
+    assert rig.release
+    tr = AUTrack(np.array([[0.0], [0.1], [0.36]], np.float32), ("AU25",), 25)
+    g = GLTF2().load(str(write_gltf(tmp_path / "lips.glb", rig, tr)))
+    blob = g.binary_blob()
+    mi = next(i for i, m in enumerate(g.meshes) if m.name == "skin")
+    names = g.meshes[mi].extras["targetNames"]
+    assert g.extras["rig"]["release"]["target"] == "lips_release"
+    node = next(i for i, n in enumerate(g.nodes) if n.mesh == mi)
+    ch = next(c for c in g.animations[0].channels
+              if c.target.node == node and c.target.path == "weights")
+    acc = g.accessors[g.animations[0].samplers[ch.sampler].output]
+    view = g.bufferViews[acc.bufferView]
+    keys = np.frombuffer(blob, np.float32, acc.count, view.byteOffset + (acc.byteOffset or 0))
+    w = keys.reshape(3, len(names))[:, names.index("lips_release")]
+    assert w.tolist() == pytest.approx([0.0, 0.5, 1.0])
+    for k, v in enumerate((0.0, 0.1, 0.36)):
+        want = rig.deform({"AU25": v})["skin"] - rig.head.rest["skin"]
+        got = v * rig.shape_deltas("AU25")["skin"] + w[k] * rig.release_deltas()["skin"]
+        assert np.abs(got - want).max() < 1e-3
+
+
 def test_character_glb_imports_in_blender(character_glb):
     from tests.blender_app import blender_import, needs_blender
 

@@ -38,7 +38,9 @@ def test_an_open_smile_shows_the_upper_teeth_and_hides_the_lower(name):
     head, rig = load_head(name)
     up, lo = _incisors(head, rig)
     lm = head.landmarks
-    rest = head["skin"].vertices
+    rest = head["skin"].vertices  # lips pressed together: seated against them once parted
+    if rig.release:
+        rest = rest + rig.release_deltas()["skin"]
     assert rest[lm[62], 1] - head["teeth"].vertices[up, 1].min() == pytest.approx(0.21, abs=0.02)
     pos = rig.deform(SMILE)
     ul, ll = pos["skin"][lm[62], 1], pos["skin"][lm[66], 1]
@@ -90,3 +92,19 @@ def test_a_relaxed_mouth_is_closed_and_au25_parts_it(name):
 
     assert abs(gap(head["skin"].vertices)) < 0.5
     assert gap(rig.deform({"AU25": 1.0})["skin"]) > 4.0
+
+
+@pytest.mark.parametrize("name", ["amara", "daniel", "tomas"])
+def test_lips_pressed_together_at_rest_part_as_soon_as_an_au_parts_them(name):
+    """Seen from the front, AU25 at B and a /t/ open the lips as a real mouth does (ICT's
+    scan: 6.3 and 9.6 % IOD); the rest pose's seal had kept amara's closed at AU25 0.36 and
+    her /t/ at 3 % IOD. A trace (0.1) still leaves them closed."""
+    from mimika.face.calibration import lip_opening
+    from mimika.face.heads import load_head
+
+    _, rig = load_head(name)
+    alveolar = {"AU20": 0.05, "AU25": 0.35, "AU26": 0.12}
+    assert lip_opening(rig, {}) == 0.0
+    assert lip_opening(rig, {"AU25": 0.1}) < 0.01
+    assert lip_opening(rig, {"AU25": 0.36}) > 0.045
+    assert lip_opening(rig, alveolar) > 0.07

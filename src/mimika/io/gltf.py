@@ -569,14 +569,18 @@ class _Animation:
     """Samplers and channels of one glTF animation over a track's frame times (a single
     frame becomes two keys: players need an interval), morph weights included."""
 
-    def __init__(self, b: _Builder, track: AUTrack, morph_nodes) -> None:
+    def __init__(self, b: _Builder, track: AUTrack, morph_nodes,
+                 derived: Mapping[str, np.ndarray] | None = None) -> None:
         times = (np.arange(track.n_frames) / track.fps).astype(np.float32)
-        vals = track.values
+        cols = np.column_stack([track.values, *(derived or {}).values()])
         if len(times) == 1:
             times = np.array([0.0, 1.0 / track.fps], np.float32)
-            vals = np.repeat(vals, 2, axis=0)
+            cols = np.repeat(cols, 2, axis=0)
         self.n = len(times)
-        self._col = {c: vals[:, j].astype(np.float64) for j, c in enumerate(track.channels)}
+        #: the track's channels and ``derived`` ones (a value per frame, morphs driven by
+        #: channels, e.g. the lips' release), per key
+        self._col = {c: cols[:, j].astype(np.float64)
+                     for j, c in enumerate([*track.channels, *(derived or {})])}
         self._zero = np.zeros(self.n)
         self._b, self._t = b, b.add(times, "SCALAR", _FLOAT, minmax=True)
         self.samplers: list[dict] = []

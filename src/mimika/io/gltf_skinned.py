@@ -12,6 +12,8 @@ Layout (metres; the character is modelled in cm)::
   the joints' default rotation, vertices are in bind space;
 * morph targets: the rig's shape offsets per modelled AU (and L/R side) in bind space —
   morphs apply before skinning in glTF, as in the rig; names in ``mesh.extras.targetNames``;
+  ``lips_release`` undoes the rest pose's lip seal, weighted by the AUs that part the lips
+  (``extras.rig.release`` says how; the animation carries its weights);
 * materials carry the painted textures (PNG, sRGB) with ``alphaMode`` BLEND for hair and
   lashes, MASK for cut-outs; skin textures drop their alpha (a gloss map for mimika's shader);
 * animation ``mimika``: morph weights, joint rotations (head AUs shared over neck and head,
@@ -51,6 +53,9 @@ def _morph_codes(rig: Any) -> list[str]:
 
 
 _TARGETS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: the morph of the rig's ``release`` (lips held together at rest, parted by AU10/16/25–27):
+#: its weight follows those AUs (``extras.rig.release``), animated like the AUs' own
+RELEASE = "lips_release"
 
 
 def _targets(rig: Any) -> tuple[list[str], dict[str, list[tuple[str, np.ndarray]]]]:
@@ -60,10 +65,12 @@ def _targets(rig: Any) -> tuple[list[str], dict[str, list[tuple[str, np.ndarray]
     if rig not in _TARGETS:
         codes = _morph_codes(rig)
         deltas = {c: rig.shape_deltas(c) for c in codes}
+        if rig.release:
+            deltas[RELEASE] = rig.release_deltas()
         out: dict[str, list[tuple[str, np.ndarray]]] = {}
         for o in rig.bind_head.objects:
             out[o.name] = []
-            for c in codes:
+            for c in deltas:
                 d = deltas[c].get(o.name)
                 if d is None or np.abs(d).max() <= 1e-6:
                     continue
@@ -175,7 +182,11 @@ def rig_description(rig: Any) -> dict[str, Any]:
     def r(v: Any) -> list[float]:
         return [round(float(x), 6) for x in np.asarray(v, float)]
 
+    release = {} if not rig.release else {"release": {
+        "target": RELEASE, "by": list(rig.release[0]), "full_at": rig.release[1],
+        "weight": "smoothstep(largest value of 'by' (either side) / full_at)"}}
     return {
+        **release,
         "rest": {k: r(v) for k, v in sk.rest_pose.items()},
         "head_share": {k: float(v) for k, v in sk.head_share.items()},
         "head_rot": {c: r(v) for c, v in rig._head_rot.items()},
@@ -201,7 +212,9 @@ def _top4(w: Any) -> tuple[np.ndarray, np.ndarray]:
 
 def _animation(b: _Builder, rig: Any, track: AUTrack, morph_nodes, eye_nodes) -> dict:
     sk = rig.skinning
-    anim = _Animation(b, track, morph_nodes)
+    derived = {RELEASE: rig.release_weights(track.values, track.channels)} if rig.release \
+        else None
+    anim = _Animation(b, track, morph_nodes, derived)
     eye_rv = anim.weighted(rig._eye_rot)
     head_rv = anim.weighted(rig._head_rot)
     head_tr = anim.weighted(rig._head_tr)

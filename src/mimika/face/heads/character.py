@@ -125,6 +125,8 @@ def assemble(built: Built, character: Character, parts_of=None,
     bind_head = Head(character.name, tuple(bind_objs), lm, a, description=desc, meta=meta)
     shapes = _shape_set(built, scale)
     table = calibrated_table(load_table("makehuman_aus.json"), calibration)
+    if built.lip_seal > 0:  # parting the lips releases what closed them at rest (lips.py)
+        table["release"] = {**table["lip_release"], "shapes": {"mouthClose": -built.lip_seal}}
     skinning = Skinning(sk.names, heads_cm, sk.parents, built.weights,
                         {k: np.asarray(v) for k, v in pose.items()}, table["head_share"],
                         table.get("body", {}))
@@ -172,8 +174,8 @@ def _with_ict_style(built: Built) -> Built:
 
 
 def built_character(character: Character) -> Built:
-    """The character's geometry, from the cache or built (and cached), lips together at
-    rest and teeth seated behind them."""
+    """The character's geometry, from the cache or built (and cached), teeth seated behind
+    the lips and the lips then together at rest."""
     path = cache.cache_path(character.geometry_key())
     built = cache.load(path)
     if built is None:
@@ -184,7 +186,7 @@ def built_character(character: Character) -> Built:
             cache.save(path, built)
         except OSError as e:
             log.warning("cannot cache character %r in %s: %s", character.name, path, e)
-    return seat_teeth(seal_lips(built))
+    return seal_lips(seat_teeth(built))
 
 
 _LOADED: dict[str, tuple[Head, SkinnedRig]] = {}

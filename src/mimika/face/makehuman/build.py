@@ -260,7 +260,8 @@ class Outfit:
 @dataclass
 class Built:
     """A character in bind space (base units, before the rest pose): pieces, skeleton,
-    faceunit shape deltas per piece (S, n, 3), and skin weights per piece (n, B)."""
+    faceunit shape deltas per piece (S, n, 3), and skin weights per piece (n, B);
+    ``lip_seal``: how much of ``mouthClose`` the rest pose took to close the lips (lips.py)."""
 
     pieces: list[Piece]
     skeleton: Skeleton
@@ -268,6 +269,7 @@ class Built:
     deltas: dict[str, np.ndarray]
     weights: dict[str, sp.csr_matrix]
     base_vertices: np.ndarray
+    lip_seal: float = 0.0
 
 
 def _skin_piece(base: BaseMesh, verts: np.ndarray, hidden: np.ndarray) -> Piece:

@@ -7,7 +7,14 @@ face), so the seated teeth show as a white line between them and a neutral face 
 neutral front view). A relaxed face has its lips together, and FACS codes any parting as
 AU25. So the rest pose takes as much of the character's own ``mouthClose`` faceunit (lips
 toward each other, jaw still) as brings its inner lip edges together on average, measured at
-the 68-point landmarks 61-63 and 65-67; AU25 and the jaw then part them from there.
+the 68-point landmarks 61-63 and 65-67.
+
+Full lips then overlap in depth: pressed together, they would have to part by the seal before
+any opening shows (AU25 at 0.36 left the default character's lips closed seen from the front,
+where the ICT scan of an actor opens 3.8 mm; the speech visemes of /s t n/ opened 0.4-1.9 mm
+against its 4.4-5.8). So the AUs that part the lips release the seal at once (``lip_release``
+in ``makehuman_aus.json``: the rig adds ``-seal`` of ``mouthClose`` with weight
+smoothstep(largest of those AUs / full_at)), and the opening then follows the AUs as ICT's.
 """
 
 from __future__ import annotations
@@ -59,4 +66,4 @@ def seal_lips(built: Built) -> Built:
     base = built.base_vertices.copy()
     base[skin.weld] += w * built.deltas[skin.name][k]
     return dataclasses.replace(built, pieces=pieces, base_vertices=base.astype(
-        built.base_vertices.dtype))
+        built.base_vertices.dtype), lip_seal=w)

@@ -8,7 +8,9 @@ well above that of the lower lip. Parted lips (AU25, a smile) showed both rows e
 a clenched-teeth grimace — or, with the gums drawn as gums, a gummy smile. So the crowns
 below the gum margin are lengthened toward the bite to their real length, and each row is
 then moved vertically so that at rest its incisal edge sits where the ICT Face Model's scan of
-an actor has it (``data/teeth.json``); the tongue goes with the lower row.
+an actor has it (``data/teeth.json``); the tongue goes with the lower row. The lips they are
+seated against are MakeHuman's, before the rest pose presses them together (lips.py): that
+seal is released as soon as the lips part, and the teeth then show as ICT's.
 """
 
 from __future__ import annotations

@@ -166,6 +166,17 @@ class BlendshapeRig(Rig):
                 self._bilateral_side[code] = str(spec["bilateral_side"]).upper()
         self._shape_codes = tuple(codes)
         self._row = {c: 2 * i for i, c in enumerate(codes)}  # left row; right row = +1
+        #: (AUs, full_at) of ``release`` in the table (lips a rest pose holds together):
+        #: its shapes, one row after the AUs', weigh smoothstep(largest of those AUs / full_at)
+        self.release: tuple[tuple[str, ...], float] | None = None
+        rel = table.get("release")
+        if rel and rel.get("shapes"):
+            missing = [n for n in rel["shapes"] if n not in shape_index]
+            if missing or not rel.get("by") or not float(rel.get("full_at", 0)) > 0:
+                raise DataError(f"AU table release: needs shapes the head has (lacks "
+                                f"{missing}), AUs in 'by' and full_at > 0")
+            rows.append(sum(np.float32(w) * full_delta(n) for n, w in rel["shapes"].items()))
+            self.release = (tuple(parse_au(c) for c in rel["by"]), float(rel["full_at"]))
         full = np.stack(rows) if rows else np.zeros((0, n_tot, 3), np.float32)
         moved = np.flatnonzero(np.any(np.abs(full) > _EPS, axis=(0, 2)))
         # bridge gaps of < _GAP still vertices so the moving set is a few contiguous segments
@@ -234,7 +245,27 @@ class BlendshapeRig(Rig):
         if row is None:
             return {}
         side = c[4:] or self._bilateral_side.get(b, "")
-        rows = [r for r, s in ((row, "L"), (row + 1, "R")) if side in ("", s)]
+        return self._row_deltas([r for r, s in ((row, "L"), (row + 1, "R")) if side in ("", s)])
+
+    def release_deltas(self) -> dict[str, np.ndarray]:
+        """The ``release`` shapes at weight 1 per object, like :meth:`shape_deltas`; {} if the
+        table has none."""
+        return self._row_deltas([self.delta_matrix.shape[0] - 1]) if self.release else {}
+
+    def release_weights(self, values: np.ndarray, channels: Sequence[str]) -> np.ndarray:
+        """The ``release`` weight per frame of ``values`` (T, K) over ``channels``."""
+        x, _ = self._rows_of(np.asarray(values, np.float32), list(self.check(
+            dict.fromkeys(channels, 0.0))))
+        return x[:, -1] if self.release else np.zeros(len(x), np.float32)
+
+    def _release(self, x: np.ndarray) -> np.ndarray:
+        """Release weights from per-row AU values ``x`` (T, rows)."""
+        codes, full = self.release
+        cols = [r + k for c in codes if (r := self._row.get(c)) is not None for k in (0, 1)]
+        v = x[:, cols].max(1) if cols else np.zeros(len(x), np.float32)
+        return _smoothstep(v / np.float32(full)).astype(np.float32)
+
+    def _row_deltas(self, rows: list[int]) -> dict[str, np.ndarray]:
         d = self.delta_matrix[rows].sum(0)
         flat = np.zeros(len(self._rest) * 3, np.float32)
         for a, e, col in self._segments:
@@ -256,6 +287,12 @@ class BlendshapeRig(Rig):
                 if r:
                     idx.append(row + 1)
                     val.append(r)
+        if self.release:
+            x = np.zeros((1, self.delta_matrix.shape[0]), np.float32)
+            x[0, idx] = val
+            if (w := float(self._release(x)[0])) > 0:
+                idx.append(len(x[0]) - 1)
+                val.append(w)
         if idx:
             dm = self.delta_matrix
             d = dm[idx[0]] * np.float32(val[0])
@@ -338,6 +375,29 @@ class BlendshapeRig(Rig):
                 _add3(q, c)
                 b[p] = q
 
+    def _rows_of(self, vals: np.ndarray, chans: list[str]) -> tuple[np.ndarray, np.ndarray]:
+        """Per frame of ``vals`` (T, K) over checked ``chans``: the weight of every delta row
+        (T, rows; the release's last), and the channels' eye rotation, head rotation and head
+        translation vectors (3, K, 3)."""
+        sel = np.zeros((len(chans), self.delta_matrix.shape[0]), np.float32)
+        motion = np.zeros((3, len(chans), 3))
+        for k, c in enumerate(chans):
+            b = base_code(c)
+            side = c[4:] or self._bilateral_side.get(b, "")
+            row = self._row.get(b)
+            if row is not None:
+                if side in ("", "L"):
+                    sel[k, row] = 1
+                if side in ("", "R"):
+                    sel[k, row + 1] = 1
+            for m, table in zip(motion, (self._eye_rot, self._head_rot, self._head_tr),
+                                strict=True):
+                m[k] = table.get(b, 0.0)
+        x = np.minimum(vals @ sel, 1.0)  # per-side sums clipped, as split_sides does
+        if self.release:
+            x[:, -1] = self._release(x)
+        return x, motion
+
     def deform_batch(self, values: np.ndarray, channels: Sequence[str]) -> dict[str, np.ndarray]:
         """Positions for T frames: values (T, K) in [0, 1] over ``channels`` → name → (T, N, 3).
 
@@ -351,24 +411,7 @@ class BlendshapeRig(Rig):
         chans = list(self.check(dict.fromkeys(channels, 0.0)))
         if len(chans) != len(channels):
             raise ParameterError("channels must be unique")
-        n_rows = self.delta_matrix.shape[0]
-        sel = np.zeros((len(chans), n_rows), np.float32)
-        eye = np.zeros((len(chans), 3))
-        head = np.zeros((len(chans), 3))
-        trans = np.zeros((len(chans), 3))
-        for k, c in enumerate(chans):
-            b = base_code(c)
-            side = c[4:] or self._bilateral_side.get(b, "")
-            row = self._row.get(b)
-            if row is not None:
-                if side in ("", "L"):
-                    sel[k, row] = 1
-                if side in ("", "R"):
-                    sel[k, row + 1] = 1
-            eye[k] = self._eye_rot.get(b, 0.0)
-            head[k] = self._head_rot.get(b, 0.0)
-            trans[k] = self._head_tr.get(b, 0.0)
-        x = np.minimum(vals @ sel, 1.0)  # per-side sums clipped, as split_sides does
+        x, (eye, head, trans) = self._rows_of(vals, chans)
         used = np.flatnonzero(np.any(x > 0, axis=0))
         dm = self.delta_matrix[used]
         eye_rv, head_rv, head_tr = vals @ eye, vals @ head, vals @ trans

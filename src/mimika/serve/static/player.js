@@ -32,6 +32,18 @@ const TAP = `registerProcessor("mimika-tap", class extends AudioWorkletProcessor
 const VRM_VOWEL = { aa: "Fcl_MTH_A", E: "Fcl_MTH_E", ih: "Fcl_MTH_I", oh: "Fcl_MTH_O",
                     ou: "Fcl_MTH_U", CH: "Fcl_MTH_I", SS: "Fcl_MTH_I", RR: "Fcl_MTH_O" };
 
+// A mimika character's lip release (the GLB's extras.rig.release, as its studio viewer
+// computes it): smoothstep of the largest of its AUs (per side, at most 1) over full_at.
+function releaseWeight(rel, w) {
+  let v = 0;
+  for (const c of rel.by) {
+    const both = w[c] || 0;
+    v = Math.max(v, Math.min(both + (w[c + "L"] || 0), 1), Math.min(both + (w[c + "R"] || 0), 1));
+  }
+  const t = Math.min(Math.max(v / rel.full_at, 0), 1);
+  return t * t * (3 - 2 * t);
+}
+
 export class MimikaHead {
   constructor(container, { server, avatar = "head.glb", background = 0x20242c } = {}) {
     this.container = container;
@@ -231,6 +243,7 @@ export class MimikaHead {
     const gltf = await new GLTFLoader().loadAsync(this.avatarUrl);
     this.root = gltf.scene;
     this.scene.add(this.root);
+    this.release = ((gltf.parser.json.extras || {}).rig || {}).release || null;
     this.meshes = [];
     this.root.traverse((o) => {
       if (o.morphTargetDictionary) this.meshes.push(o);
@@ -325,6 +338,8 @@ export class MimikaHead {
         if (iL !== undefined && dict[n] === undefined) inf[iL] = v;
         if (iR !== undefined && dict[n] === undefined) inf[iR] = v;
       }
+      const k = this.release ? dict[this.release.target] : undefined;
+      if (k !== undefined) inf[k] = releaseWeight(this.release, w);
       for (const n of ["jawOpen", "AU26", "AU27", "AU25"]) {
         if (dict[n] !== undefined) mouth = Math.max(mouth, inf[dict[n]]);
       }

@@ -8,6 +8,18 @@ import { Look } from "./look.js";
 
 const DEG = Math.PI / 180;
 
+// The weight of a character's lip release (the GLB's extras.rig.release): smoothstep of the
+// largest of its AUs (per side: the AU plus its one-sided code, at most 1) over full_at.
+function releaseWeight(rel, frame) {
+  let v = 0;
+  for (const c of rel.by) {
+    const both = frame[c] || 0;
+    v = Math.max(v, Math.min(both + (frame[c + "L"] || 0), 1), Math.min(both + (frame[c + "R"] || 0), 1));
+  }
+  const t = Math.min(Math.max(v / rel.full_at, 0), 1);
+  return t * t * (3 - 2 * t);
+}
+
 export class Viewer {
   constructor(canvas) {
     this.canvas = canvas;
@@ -181,6 +193,8 @@ export class Viewer {
         const i = dict[code];
         if (i !== undefined) inf[i] = v;
       }
+      const rel = this.rig && this.rig.release, k = rel ? dict[rel.target] : undefined;
+      if (k !== undefined) inf[k] = releaseWeight(rel, frame);
     }
     const rot = (table) => {
       const rv = new THREE.Vector3();
