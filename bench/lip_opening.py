@@ -3,9 +3,10 @@
 Per head: the lips' opening on the mouth's midline seen from straight ahead
 (:func:`mimika.face.calibration.lip_opening`: full lips that touch in front count as closed,
 however far apart their inner edges), in % of the inter-ocular distance, at rest, for AU25
-from a trace (0.1) to the maximum, and for the mouth targets of the speech visemes whose lips
-are apart (``speech/data/visemes.json``) — each also as a ratio to the ICT Face Model's (a
-light-stage scan of an actor), where ICT's lips stand at least 1 % IOD apart::
+from a trace (0.1) to the maximum, for AU10 and AU16 (which part them too) at 0.3 and 1, and
+for the mouth targets of the speech visemes whose lips are apart
+(``speech/data/visemes.json``) — each also as a ratio to the ICT Face Model's (a light-stage
+scan of an actor), where ICT's lips stand at least 1 % IOD apart::
 
     MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/lip_opening.py [--markdown]
 """
@@ -22,11 +23,13 @@ AU25 = (0.1, 0.2, 0.36, 0.6, 1.0)
 
 
 def cases() -> dict[str, dict[str, float]]:
-    """Label → AU values: rest, AU25 at each of :data:`AU25`, the visemes with lips apart."""
+    """Label → AU values: rest, AU25 at each of :data:`AU25`, AU10 and AU16, the visemes with
+    lips apart."""
     classes = json.loads(resources.files("mimika.speech").joinpath(
         "data", "visemes.json").read_text("utf-8"))["classes"]
     out: dict[str, dict[str, float]] = {"rest": {}}
     out.update({f"AU25 {k:g}": {"AU25": k} for k in AU25})
+    out.update({f"{c} {k:g}": {c: k} for c in ("AU10", "AU16") for k in (0.3, 1.0)})
     out.update({name: c["targets"] for name, c in classes.items()
                 if name not in ("sil", "bilabial")})
     return out
