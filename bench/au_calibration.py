@@ -16,8 +16,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-import numpy as np
-
 HEADS = ("amara", "daniel", "mei", "tomas", "builtin")
 
 
@@ -86,11 +84,10 @@ def main(argv: list[str] | None = None) -> int:
 
 def shape_errors(rig, ref_rig, codes) -> dict[str, float]:
     """Landmark shape error of each AU of ``codes`` the rig models against ``ref_rig``'s."""
-    from mimika.face.calibration import landmark_motion, shape_error
+    from mimika.face.calibration import au_displacement, landmark_motion, shape_error
 
     def lm(r, c):
-        o = r.head.landmark_object
-        return landmark_motion(np.asarray(r.deform({c: 1.0})[o]) - r.head.rest[o], r.head)
+        return landmark_motion(au_displacement(r, c), r.head)
 
     return {c: shape_error(lm(rig, c), lm(ref_rig, c)) for c in codes
             if c in rig.supported and c in ref_rig.supported}

@@ -33,8 +33,8 @@ import numpy as np
 from mimika.face.head import Head
 
 __all__ = ["EXCEPTIONS", "EXTRA_AUS", "LID_AUS", "SEED_AUS", "TOLERANCE", "FaceFront",
-           "au_motion", "eye_opening", "face_front", "landmark_motion", "lid_motion",
-           "lip_opening", "motion", "ratios", "shape_error"]
+           "au_displacement", "au_motion", "eye_opening", "face_front", "landmark_motion",
+           "lid_motion", "lip_opening", "motion", "ratios", "shape_error"]
 
 #: the 22 AUs of seed 002 that move the face (its head and eye turns are rotations)
 SEED_AUS = ("AU01", "AU02", "AU04", "AU05", "AU06", "AU07", "AU09", "AU10", "AU12", "AU15",
@@ -198,26 +198,25 @@ def lid_motion(rig, codes: Iterable[str] = LID_AUS) -> dict[str, float]:
             for code in codes if code in rig.supported}
 
 
-def au_motion(rig, codes: Iterable[str] = SEED_AUS) -> dict[str, tuple[float, float]]:
-    """``(peak, extent)`` of each AU of ``codes`` the rig models, at intensity 1 (both sides).
+def au_displacement(rig, code: str) -> np.ndarray:
+    """How AU ``code`` at intensity 1 moves each vertex of the head's landmark object (N, 3).
 
     A rig whose rest pose holds the lips together (its ``release``) measures the AUs that
     part them from the released lips: the seal is its rest pose's, not the AU's motion (ICT's
     scan rests with the lips 0.7 mm apart)."""
-    head = rig.head
-    o = head.landmark_object
-    front = face_front(head)
-    rest = head.rest[o].astype(np.float64)
-    release = rig.release_deltas()[o] if getattr(rig, "release", None) else None
-    out = {}
-    for code in codes:
-        if code not in rig.supported:
-            continue
-        moved = np.asarray(rig.deform({code: 1.0})[o], np.float64)
-        base = rest if release is None else \
-            rest + float(rig.release_weights(np.ones((1, 1)), [code])[0]) * release
-        out[code] = motion(moved - base, front)
-    return out
+    o = rig.head.landmark_object
+    d = np.asarray(rig.deform({code: 1.0})[o], np.float64) - rig.head.rest[o]
+    if getattr(rig, "release", None):
+        d -= float(rig.release_weights(np.ones((1, 1)), [code])[0]) * rig.release_deltas()[o]
+    return d
+
+
+def au_motion(rig, codes: Iterable[str] = SEED_AUS) -> dict[str, tuple[float, float]]:
+    """``(peak, extent)`` of each AU of ``codes`` the rig models, at intensity 1 (both sides),
+    from :func:`au_displacement`."""
+    front = face_front(rig.head)
+    return {code: motion(au_displacement(rig, code), front) for code in codes
+            if code in rig.supported}
 
 
 def ratios(measured: Mapping[str, tuple[float, float]],
