@@ -130,16 +130,16 @@ def _iod(head: Head) -> float:
 def lip_opening(rig, aus: Mapping[str, float], step: float = 0.001) -> float:
     """How far apart the lips stand seen from straight ahead, in IOD: on the mouth's midline,
     the height of the run of rays (along −z, ``step`` IOD apart) that pass between the lips —
-    meeting no skin of the landmark object within 0.05 IOD behind their inner edges (68-point
-    landmarks 62 and 66). Full lips that touch in front are closed, however far apart their
-    inner edges."""
+    meeting no skin of the landmark object within 0.05 IOD behind the deeper of their inner
+    edges (68-point landmarks 62 and 66; a dropped jaw takes the lower lip back). Full lips
+    that touch in front are closed, however far apart their inner edges."""
     head = rig.head
     o = head.landmark_object
     skin = np.asarray(rig.deform(aus)[o], np.float64)
     lm = skin[head.landmarks]
     iod = _iod(head)
     x0 = lm[[48, 54], 0].mean()
-    cy, cz = lm[[62, 66], 1].mean(), lm[[62, 66], 2].mean()
+    cy, cz = lm[[62, 66], 1].mean(), lm[[62, 66], 2].min()
     f = np.concatenate([p.faces for p in head[o].parts])
     tri = skin[f]
     c = tri.mean(1)
