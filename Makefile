@@ -32,6 +32,7 @@ judge: setup  # the expressions shown to an emotion recogniser, per head × view
 	bash scripts/setup-judge.sh
 	$(BIN)/python bench/expression_judge.py
 	$(BIN)/python bench/au_calibration.py
+	$(BIN)/python bench/lip_opening.py
 
 fuzz: setup  # ≥ 100 000 hostile inputs to every reader: 0 crashes, 0 hangs (bench/fuzz.py)
 	$(BIN)/python bench/fuzz.py --cases 100000
