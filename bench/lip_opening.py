@@ -9,6 +9,9 @@ for the mouth targets of the speech visemes whose lips are apart
 scan of an actor), where ICT's lips stand at least 1 % IOD apart::
 
     MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/lip_opening.py [--markdown]
+
+``--bulletin``: also the example news bulletin's mouth track (``mimika news --example en``),
+every 4th frame within a word: how often the lips stand apart (> 1 % IOD) and how far.
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--heads", default=",".join(HEADS))
     p.add_argument("--markdown", action="store_true", help="a table for the docs")
+    p.add_argument("--bulletin", action="store_true", help="the example bulletin's openings")
     a = p.parse_args(argv)
     heads = a.heads.split(",")
     table = {h: {c: lip_opening(load_head(h)[1], aus) for c, aus in cases().items()}
@@ -67,7 +71,33 @@ def main(argv: list[str] | None = None) -> int:
               f"{c:24s}" + "".join(f"{x:>18s}" for x in cells))
     if ref:
         print(f"\n{ok} of {n} head × pose pairs within {lo}–{hi}× ICT's opening")
+    if a.bulletin:
+        bulletin(heads)
     return 0
+
+
+def bulletin(heads: list[str]) -> None:
+    """Print, per head, the lips' openings over the example bulletin's words."""
+    import numpy as np
+
+    from mimika.face.calibration import lip_opening
+    from mimika.face.heads import load_head
+    from mimika.newsreader import example_bulletin, news_track, parse_article, speak_article
+
+    art = parse_article(example_bulletin("en"))
+    utt, paras = speak_article(art, lang="en")
+    print("\nexample bulletin, every 4th frame within a word:")
+    for h in heads:
+        rig = load_head(h)[1]
+        tr = news_track(art, utterance=utt, paragraph_starts=paras, fps=25.0,
+                        supported=rig.supported).track
+        t = np.arange(0, tr.n_frames, 4)
+        t = t[[any(w.start <= k / tr.fps <= w.end for w in utt.words) for k in t]]
+        face = [j for j, c in enumerate(tr.channels) if c[:3] not in ("AU5", "AU6", "bod")]
+        op = np.array([lip_opening(rig, {tr.channels[j]: float(tr.values[k, j]) for j in face})
+                       for k in t])  # head turns, gaze and body left out
+        print(f"{h:8s} lips apart in {100 * np.mean(op > 0.01):3.0f} % of {len(t)} frames, "
+              f"median opening {100 * np.median(op):.1f} % IOD")
 
 
 if __name__ == "__main__":
