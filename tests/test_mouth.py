@@ -108,3 +108,23 @@ def test_lips_pressed_together_at_rest_part_as_soon_as_an_au_parts_them(name):
     assert lip_opening(rig, {"AU25": 0.1}) < 0.01
     assert lip_opening(rig, {"AU25": 0.36}) > 0.045
     assert lip_opening(rig, alveolar) > 0.07
+
+
+def test_the_default_character_speaks_with_parted_lips_and_closes_them_at_p_b_m():
+    """Lip-sync on the newsreader's own face: lips shut at every /p b m/ apex (seen from the
+    front) and stand apart between them as a real mouth's do (median over the words 12.6 %
+    of the eye distance; 6.6 % while the rest pose's seal held them together)."""
+    pytest.importorskip("espeakng_loader")
+    from mimika.face.calibration import lip_opening
+    from mimika.face.heads import DEFAULT_HEAD, load_head
+    from mimika.speech import bilabial_apex_times, mouth_track, synthesize
+
+    u = synthesize("Bob, Pam and Mum bought a bumper box of bubble gum. Maybe a big map, "
+                   "please.", lang="en", engine="espeak")
+    tr = mouth_track(u, fps=25)
+    _, rig = load_head(DEFAULT_HEAD)
+    apex = bilabial_apex_times(u)
+    assert len(apex) >= 8
+    assert max(lip_opening(rig, tr.frame(round(t * 25))) for t in apex) == 0.0
+    words = [k for k in range(tr.n_frames) if any(w.start <= k / 25 <= w.end for w in u.words)]
+    assert np.median([lip_opening(rig, tr.frame(k)) for k in words[::2]]) > 0.09
