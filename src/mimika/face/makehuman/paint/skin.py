@@ -38,6 +38,8 @@ HEAD_SIZE = (1024, 2048)
 BODY_SIZE = (1024, 1024)
 #: texels left around the head island in its atlas
 PAD = 6
+#: skin farther than this from the hair's surface (cm) is not tinted by it
+HAIR_REACH = 1.5
 
 
 def landmarks(piece: Piece) -> np.ndarray:
@@ -73,8 +75,8 @@ def _lid_margin(pos: np.ndarray, tris: np.ndarray, weld: np.ndarray, lm: np.ndar
 def _scalp_cover(piece: Piece, character: Character, pos: np.ndarray) -> np.ndarray:
     """Per vertex: how much hair lies over the skin here — 1 under the hair's body, fading
     over its thinned-out border (where strand tips let the skin show between them) and where
-    the shell lifts off (the hair is fitted from its ``.mhclo`` onto this skin's bind
-    pose)."""
+    the hair's surface lies farther than :data:`HAIR_REACH` (the hair is fitted from its
+    ``.mhclo`` onto this skin's bind pose)."""
     from scipy.sparse.csgraph import dijkstra
     from scipy.spatial import cKDTree
 
@@ -94,8 +96,15 @@ def _scalp_cover(piece: Piece, character: Character, pos: np.ndarray) -> np.ndar
     rim = np.unique(boundary_edges(f))
     inner = dijkstra(g, directed=False, indices=rim, min_only=True) if len(rim) else \
         np.full(n, 10.0)
-    d, i = cKDTree(hp).query(pos)
-    return smoothstep(1.2, 0.5, d) * smoothstep(-0.3, 1.2, np.minimum(inner[i], 10.0))
+    # distance to the hair's surface, not only to its vertices (cards span centimetres):
+    # each triangle sampled on a barycentric grid, each sample carrying its corners' depth
+    # into the hair from its rim
+    b = np.array([(i, j) for i in range(5) for j in range(5 - i)], np.float64) / 4.0
+    w = np.c_[1.0 - b.sum(1), b]  # (S, 3)
+    pts = np.einsum("sk,fkd->fsd", w, hp[f]).reshape(-1, 3)
+    depth = np.einsum("sk,fk->fs", w, np.minimum(inner, 10.0)[f]).ravel()
+    d, i = cKDTree(pts).query(pos)
+    return smoothstep(HAIR_REACH, 0.5, d) * smoothstep(-0.3, 1.2, depth[i])
 
 
 class _Face:
@@ -333,10 +342,10 @@ def _paint_head(at, pos, uv0, cav, cover, margin, lm, on_lips, base, hair, ph, s
 
     # brows: skin under them a little darker (hair roots); scalp tinted by the hair
     c = color.mix(c, c * 0.55 + 0.45 * hair, 0.45 * v["brows"])
-    # the scalp under hair: darkened by the roots and the hair's shade, toward the hair's
-    # colour, so skin between strand tips and cards reads as hair, not as light streaks
+    # the scalp under hair: as dark as the hair in its own shade, so skin between strand
+    # tips and cards reads as hair, not as light streaks
     scalp = v["cover"]
-    c = color.mix(c, 0.2 * c + 0.8 * hair, scalp)
+    c = color.mix(c, 0.1 * c + 0.5 * hair, scalp)
 
     # beard shadow: stubble dots over a bluish shadow, strength by sex and age
     g_beard = ph["male"] * (0.55 + 0.45 * smoothstep(18.0, 45.0, np.float32(ph["age"])))
