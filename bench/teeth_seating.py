@@ -3,9 +3,10 @@
 Per head, at rest and in three mouth poses: how far the upper incisors' edge lies below the
 inner edge of the upper lip (landmark 62), how far the lower incisors' edge stands above that
 of the lower lip (66), the gap between the rows and between the lips (mm, at the midline);
-``show`` is the share of the lip opening the upper teeth fill. A person's open smile shows the
-upper teeth and hides the lower ones (ICT: 6+12+25 shows 0.74 upper, the lower edge at the
-lip); both rows edge to edge read as clenched teeth::
+``show`` is the share of the lip opening the upper teeth fill; ``behind`` how far each row's
+front lies behind the inner edge of its lip (mm, along the face's forward axis). A person's
+open smile shows the upper teeth and hides the lower ones (ICT: 6+12+25 shows 0.74 upper,
+the lower edge at the lip); both rows edge to edge read as clenched teeth::
 
     MIMIKA_ICT_DIR=../shared/ict-facekit .venv/bin/python bench/teeth_seating.py
 """
@@ -56,7 +57,8 @@ def main(argv: list[str] | None = None) -> int:
     if os.environ.get("MIMIKA_ICT_DIR"):
         heads = ["ict", *heads]
     print(f"{'head':7s} {'pose':8s} {'upper below lip':>16s} {'lower above lip':>16s} "
-          f"{'teeth gap':>10s} {'lips gap':>9s} {'show':>5s}")
+          f"{'teeth gap':>10s} {'lips gap':>9s} {'show':>5s} {'upper behind':>13s} "
+          f"{'lower behind':>13s}")
     for name in heads:
         head, rig = load_head(name)
         sel, up, lo = incisors(head, rig)
@@ -68,8 +70,10 @@ def main(argv: list[str] | None = None) -> int:
             ue, le = t[up, 1].min(), t[lo, 1].max()
             ul, ll = skin[lm[62], 1], skin[lm[66], 1]
             show = (ul - ue) / (ul - ll) if ul - ll > 0.3 else float("nan")
+            behind = [10 * (skin[lm[k], 2] - t[row, 2].max()) for k, row in ((62, up), (66, lo))]
             print(f"{name:7s} {pose:8s} {10 * (ul - ue):13.1f} mm {10 * (le - ll):13.1f} mm "
-                  f"{10 * (ue - le):7.1f} mm {10 * (ul - ll):6.1f} mm {show:5.2f}")
+                  f"{10 * (ue - le):7.1f} mm {10 * (ul - ll):6.1f} mm {show:5.2f} "
+                  f"{behind[0]:10.1f} mm {behind[1]:10.1f} mm")
     return 0
 
 
