@@ -85,6 +85,31 @@ def test_the_strap_fades_in_and_out_in_the_lower_third():
     assert (out[:y0] == 90).all() and (out[y1:] == 90).all()
 
 
+@pytest.mark.parametrize("size", [(1280, 720), (640, 480), (854, 480)])
+def test_the_strap_keeps_its_colours_through_h264(tmp_path, size):
+    """H.264 keeps one colour sample per 2×2 pixels: a strap edge inside a pair (the accent
+    stripe ended on an odd row at 720p) came out of the encoder as a grey line under the
+    orange stripe. Every edge now lies on the grid, so each of the strap's rows keeps its
+    colour in the video."""
+    import av
+
+    from mimika.render.video import TitleStrap, VideoWriter
+
+    w, h = size
+    s = TitleStrap("Amara Okafor — News at Nine", size)
+    x0, y0, _, y1 = s.box
+    assert all(v % 2 == 0 for v in s.box)
+    frame = s(np.full((h, w, 3), 20, np.uint8), 3.0)
+    with VideoWriter(tmp_path / "s.mp4", fps=25, size=size, crf=12) as vw:
+        for _ in range(3):
+            vw.write(frame)
+    with av.open(str(tmp_path / "s.mp4")) as c:
+        got = next(iter(c.decode(video=0))).to_ndarray(format="rgb24").astype(int)
+    accent = frame[y0:y1, x0:x0 + 4].astype(int)
+    err = np.abs(got[y0:y1, x0:x0 + 4] - accent).max(axis=(1, 2))  # per row of the stripe
+    assert err.max() < 40, f"rows {np.flatnonzero(err >= 40) + y0} of the stripe discoloured"
+
+
 @pytest.mark.render
 def test_the_title_strap_is_in_the_video_frames(tmp_path, builtin_rig):
     import av

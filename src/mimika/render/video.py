@@ -377,7 +377,10 @@ class TitleStrap:
         self.title = check_title(title)
         name, line = split_title(self.title)
         w, h = (int(x) for x in size)
-        px = lambda k: max(round(st[k] * h), 1)  # noqa: E731
+        # every edge on an even pixel: H.264's 4:2:0 colour is one sample per 2×2 pixels, and
+        # an edge inside a pair smears the accent's orange into a grey or brown line
+        even = lambda v: max(2 * round(v / 2), 2)  # noqa: E731
+        px = lambda k: even(st[k] * h)  # noqa: E731
         x0, pad, accent = px("left"), px("pad"), px("accent_width")
         room = w - 2 * x0 - accent - 2 * pad
         rows = [(name, st["name_font"], st["name_size"], st["name_bar"], st["name_color"])]
@@ -394,9 +397,9 @@ class TitleStrap:
                 raise ParameterError(f"the title {self.title!r} is too long for a {w}x{h} "
                                      "video; shorten it or choose a larger --size")
             fitted.append((text, font, bar, ink))
-        width = max(max(int(f.getlength(t)) for t, f, _, _ in fitted) + 2 * pad,
-                    px("min_width") - accent)
-        heights = [round(f.size * 1.15) + pad for _, f, _, _ in fitted]
+        width = even(max(max(int(f.getlength(t)) for t, f, _, _ in fitted) + 2 * pad,
+                         px("min_width") - accent) + 1)
+        heights = [even(f.size * 1.15 + pad) for _, f, _, _ in fitted]
         total = sum(heights)
         rgb = np.zeros((total, accent + width, 3), np.float32)
         alpha = np.zeros((total, accent + width), np.float32)
@@ -412,7 +415,7 @@ class TitleStrap:
             y += bh
         rgb[:, :accent] = st["accent"][:3]
         alpha[:, :accent] = st["accent"][3]
-        top = min(px("top"), h - total)
+        top = min(px("top"), h - total - h % 2)
         #: the strap's box in the frame: (x0, y0, x1, y1) pixels
         self.box = (x0, top, min(x0 + accent + width, w), top + total)
         cw, ch = self.box[2] - x0, total
