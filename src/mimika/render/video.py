@@ -98,8 +98,8 @@ class VideoWriter:
             # (rendering is always the bottleneck), and frame threads cost ~10 % more CPU;
             # CAVLC instead of CABAC: 15-20 % less encoding CPU for ~11 % more bytes at the
             # same quality (a 720p bulletin: 1.3 → 1.5 MB); with the default preset, the
-            # cheapest sub-pixel search and no partition search: 30 % less again for 20 %
-            # more bytes and 0.2 dB PSNR (bench/bench_encode.py)
+            # cheapest sub-pixel search and no partition search: a quarter less again at the
+            # same PSNR for 40 % more bytes (the bulletin ≈ 2 MB; bench/bench_encode.py)
             params = "cabac=0" + (":subme=1:partitions=none" if preset == "veryfast" else "")
             vs.options = {"crf": str(int(crf)), "preset": preset, "threads": "1",
                           "x264-params": params}
@@ -147,8 +147,8 @@ class VideoWriter:
         t0 = time.perf_counter()
         if self.overlay is not None:
             rgb = self.overlay(rgb, index / float(self.fps))
-        # RGB → YUV 4:2:0 with point-sampled chroma: 40 % cheaper than swscale's default
-        # bilinear filter and as close to the image (bench/bench_encode.py)
+        # RGB → YUV 4:2:0 with point-sampled chroma: a third cheaper than swscale's default
+        # filter and as close to the image (bench/bench_encode.py)
         fr = av.VideoFrame.from_ndarray(rgb, format="rgb24").reformat(
             format="yuv420p", interpolation="POINT")
         fr.pts = index
