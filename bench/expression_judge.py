@@ -16,10 +16,12 @@ a real actor (skipped without ``MIMIKA_ICT_DIR``)::
     .venv/bin/python bench/expression_judge.py                       # presets + builtin
     .venv/bin/python bench/expression_judge.py --heads amara --views front --out out/judge
     .venv/bin/python bench/expression_judge.py --try fear-variants.json --as fear
+    .venv/bin/python bench/expression_judge.py --light soft --intensities 1.0
 
 ``--try`` judges other AU combinations for one class instead of the library's: a JSON file
 of ``{"label": {"AU01": 1.0, …}, …}``, each scaled by every intensity, rendered on every head
 and view and counted as recognised when the recogniser's top class is ``--as``'s.
+``--light`` renders under another ``--light`` spec (default ``studio``, as ``mimika pose``).
 
 Targets (issue 25): per head and view, at intensity 1.0, at least 6 of the 7 recognised, and
 happiness also at 0.6; landmark measures within 0.7–1.4 of ICT's.
@@ -90,7 +92,7 @@ def measure(kind: str, rest: np.ndarray, moved: np.ndarray) -> float:
     return float(ref(rest) - ref(moved)) / iod
 
 
-def run_head(name: str, views, intensities, size, out: Path) -> dict:
+def run_head(name: str, views, intensities, size, out: Path, light: str | None = None) -> dict:
     """Render ``name``'s expressions and single-AU measures; each recogniser's verdicts
     (``{judge: {"expressions": [...]}}``) and face-api's landmark measures."""
     from mimika.face.heads import load_head
@@ -99,7 +101,7 @@ def run_head(name: str, views, intensities, size, out: Path) -> dict:
 
     _, rig = load_head(name)
     jobs = []
-    with Renderer(rig.head, size=size, samples=4) as r:
+    with Renderer(rig.head, size=size, samples=4, lighting=light) as r:
         for view in views:
             todo = [(k, e, expression_aus(e, k) if e != "neutral" else {})
                     for k in intensities for e in CLASSES]
@@ -163,7 +165,7 @@ def summary(name: str, res: dict) -> str:
 
 
 def try_variants(variants: dict[str, dict[str, float]], expression: str, heads, views,
-                 intensities, size, out: Path) -> None:
+                 intensities, size, out: Path, light: str | None = None) -> None:
     """Print, per variant, intensity and recogniser, how many head × view renders read as
     ``expression`` (and each render's top class and the intended class's probability)."""
     from mimika.face.heads import load_head
@@ -172,7 +174,7 @@ def try_variants(variants: dict[str, dict[str, float]], expression: str, heads, 
     jobs = []
     for h in heads:
         _, rig = load_head(h)
-        with Renderer(rig.head, size=size, samples=4) as r:
+        with Renderer(rig.head, size=size, samples=4, lighting=light) as r:
             for view in views:
                 for label, aus in variants.items():
                     for k in intensities:
@@ -199,6 +201,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--views", default="front,three-quarter")
     p.add_argument("--intensities", default="1.0,0.6")
     p.add_argument("--size", default="512x512")
+    p.add_argument("--light", help="a --light spec (default: studio, as mimika pose)")
     p.add_argument("--out", type=Path, help="keep the renders and results.json here")
     p.add_argument("--try", dest="variants", type=Path,
                    help="JSON of {label: {AU: value}}: judge these instead of the library")
@@ -217,7 +220,7 @@ def main(argv: list[str] | None = None) -> int:
             out = a.out or Path(d)
             out.mkdir(parents=True, exist_ok=True)
             try_variants(json.loads(a.variants.read_text()), a.expression, heads, views, ks,
-                         size, out)
+                         size, out, a.light)
         return 0
     tmp = None
     if a.out is None:
@@ -229,10 +232,10 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     everything = {}
     if os.environ.get("MIMIKA_ICT_DIR"):
-        everything["ict"] = run_head("ict", views, ks, size, out)
+        everything["ict"] = run_head("ict", views, ks, size, out, a.light)
         print_head("ict", everything["ict"], None)
     for h in heads:
-        everything[h] = run_head(h, views, ks, size, out)
+        everything[h] = run_head(h, views, ks, size, out, a.light)
         print_head(h, everything[h], everything.get("ict"))
     print(f"\n{time.perf_counter() - t0:.0f} s; recognised per view ({', '.join(views)})")
     for h, res in everything.items():
