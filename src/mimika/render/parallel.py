@@ -55,9 +55,14 @@ def _open(rig: Any, size: tuple[int, int], samples: int, skin: Any, lighting: An
 
 def _draw(renderer: Any, rig: Any, values: np.ndarray, channels: Sequence[str],
           camera: Any, out: np.ndarray | None = None) -> Iterator[np.ndarray]:
-    """The chunk's images in order (into ``out[i]`` when given)."""
+    """The chunk's images in order (into ``out[i]`` when given). The chunk is deformed on one
+    BLAS thread, as in the workers: a product summed in another order moves a vertex by 1e-6
+    cm, which can change a pixel, and a video must not depend on how many processes drew it."""
+    from threadpoolctl import threadpool_limits
+
     renderer.invalidate()
-    pos = rig.deform_batch(values, channels)
+    with threadpool_limits(1, user_api="blas"):
+        pos = rig.deform_batch(values, channels)
     for i in range(len(values)):
         yield renderer.render({n: p[i] for n, p in pos.items()}, camera=camera,
                               aus=dict(zip(channels, values[i].tolist(), strict=True)),
