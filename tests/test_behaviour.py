@@ -168,8 +168,10 @@ def test_smile_during_greeting_and_farewell_only():
     t = cues.times(fps=FPS)
     (g0, g1, _), (m0, m1, _) = cues.sentences[0], cues.sentences[1]
     mid = (t > g0 + 0.5) & (t < g1 - 0.2)
-    assert tr["AU12"][mid].min() == pytest.approx(0.3, abs=0.04)
-    assert tr["AU06"][mid].min() == pytest.approx(0.3, abs=0.04)
+    k = behaviour_params()["smile"]["intensity"]  # each smile within ±10 % of it
+    assert 0.3 <= k <= 1.0  # a smile that shows, short of a full one
+    assert tr["AU12"][mid].min() == pytest.approx(k, rel=0.12)
+    assert tr["AU06"][mid].min() == pytest.approx(k, rel=0.12)
     assert tr["AU12"][(t > m0 + 1.2) & (t < m1 - 0.5)].max() == 0.0
 
 
