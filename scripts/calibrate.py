@@ -11,6 +11,7 @@ presets) is taken::
     export MIMIKA_ICT_DIR=../shared/ict-facekit
     .venv/bin/python scripts/calibrate.py characters   # face/data/makehuman_aus.json
     .venv/bin/python scripts/calibrate.py builtin      # face/data/builtin_fields.json
+    .venv/bin/python scripts/calibrate.py landmarks    # face/data/ict_landmark_motion.json
 
 * **characters** (the four presets together): each AU is MakeHuman's faceunit recipe, mixed
   with the same AU in the ``ict`` style — ICT's recipe on shapes generated on the character by
@@ -199,11 +200,32 @@ def _write(path: Path, doc: dict, one_line: tuple[str, ...]) -> Path:
     return path
 
 
+def landmarks() -> Path:
+    """ICT's landmark motion per face AU (68 × 3, inter-ocular distances) for the AUs the
+    characters match (``face/landmark_match.py``)."""
+    from mimika.face.calibration import EXTRA_AUS, SEED_AUS, landmark_motion
+    from mimika.face.heads import load_head
+
+    head, rig = load_head("ict")
+    o = head.landmark_object
+    rest = rig.deform({})[o]
+    aus = {c: np.round(landmark_motion(rig.deform({c: 1.0})[o] - rest, head), 5).tolist()
+           for c in (*SEED_AUS, *EXTRA_AUS)}
+    doc = {"_doc": "The ICT Face Model's (MIT; light-stage scans of an actor) 68-point "
+                   "landmark displacements per AU at intensity 1, in inter-ocular distances "
+                   "(x toward the subject's left, y up, z forward), from the landmarks' "
+                   "vertices of its generic neutral: what face/landmark_match.py matches. "
+                   "Written by scripts/calibrate.py landmarks.",
+           "aus": aus}
+    path = Path(str(resources.files("mimika.face").joinpath("data/ict_landmark_motion.json")))
+    return _write(path, doc, ("aus",))
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("what", choices=("characters", "builtin"))
+    p.add_argument("what", choices=("characters", "builtin", "landmarks"))
     a = p.parse_args(argv)
-    {"characters": characters, "builtin": builtin}[a.what]()
+    {"characters": characters, "builtin": builtin, "landmarks": landmarks}[a.what]()
     return 0
 
 

@@ -16,6 +16,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from mimika.face.head import Head, MeshObject, Part
+from mimika.face.landmark_match import matched
 from mimika.face.makehuman import cache
 from mimika.face.makehuman.base import first_copies, landmark_ids
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
@@ -130,7 +131,13 @@ def assemble(built: Built, character: Character, parts_of=None,
     skinning = Skinning(sk.names, heads_cm, sk.parents, built.weights,
                         {k: np.asarray(v) for k, v in pose.items()}, table["head_share"],
                         table.get("body", {}))
-    return head, SkinnedRig(head, bind_head, shapes, table, skinning)
+    rig = SkinnedRig(head, bind_head, shapes, table, skinning)
+    codes = [c for c, e in table["aus"].items() if e.get("match_landmarks")]
+    if codes:  # AUs that move the landmarks as ICT's actor does (face/landmark_match.py)
+        iod = float(np.linalg.norm(np.asarray(a["eye_L"]) - np.asarray(a["eye_R"])))
+        shapes, table = matched(rig, bind_objs[0], lm, iod, shapes, table, codes)
+        rig = SkinnedRig(head, bind_head, shapes, table, skinning)
+    return head, rig
 
 
 def _shape_set(built: Built, scale: float) -> ShapeSet:
