@@ -24,7 +24,7 @@ from importlib import resources
 import numpy as np
 
 from mimika.face.head import MeshObject
-from mimika.face.rigs.blendshape import ShapeSet
+from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet
 
 #: the landmarks matched: brows, nose, eyes and mouth — not the jaw's outline (0–16, a
 #: silhouette, where each mesh's cheek turns away) nor the upper lip's inner edge (61–63):
@@ -64,7 +64,7 @@ def correction(points: np.ndarray, anchors: np.ndarray, residual: np.ndarray,
     return out
 
 
-def matched(rig, skin: MeshObject, landmarks: np.ndarray, iod: float,
+def match_landmarks(rig: BlendshapeRig, skin: MeshObject, landmarks: np.ndarray, iod: float,
             shapes: ShapeSet, table: Mapping, codes: Sequence[str]
             ) -> tuple[ShapeSet, dict]:
     """``shapes`` and ``table`` with a correction shape per AU of ``codes``: ``rig`` is the

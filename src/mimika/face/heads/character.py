@@ -16,7 +16,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from mimika.face.head import Head, MeshObject, Part
-from mimika.face.landmark_match import matched
+from mimika.face.landmark_match import match_landmarks
 from mimika.face.makehuman import cache
 from mimika.face.makehuman.base import first_copies, landmark_ids
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
@@ -135,7 +135,7 @@ def assemble(built: Built, character: Character, parts_of=None,
     codes = [c for c, e in table["aus"].items() if e.get("match_landmarks")]
     if codes:  # AUs that move the landmarks as ICT's actor does (face/landmark_match.py)
         iod = float(np.linalg.norm(np.asarray(a["eye_L"]) - np.asarray(a["eye_R"])))
-        shapes, table = matched(rig, bind_objs[0], lm, iod, shapes, table, codes)
+        shapes, table = match_landmarks(rig, bind_objs[0], lm, iod, shapes, table, codes)
         rig = SkinnedRig(head, bind_head, shapes, table, skinning)
     return head, rig
 
