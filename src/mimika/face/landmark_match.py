@@ -5,12 +5,12 @@ as far as the ICT Face Model's light-stage scans of an actor (docs/rigs.md#calib
 far, but not always the same way: its smile pulled the mouth corners more sideways than the
 actor's and lifted the middle of the lower lip with them, so the mouth curved less and a
 smile at 0.6 did not read. For an AU whose table entry asks for it (``"match_landmarks":
-true``), the difference between the reference's motion of the brows', nose's, eyes' and
-mouth's landmarks (:data:`LANDMARKS`; inter-ocular distances, ``data/ict_landmark_motion.json``,
-written by ``scripts/calibrate.py landmarks``) and the head's is spread over the skin by
-Gaussian radial basis functions a third of an inter-ocular distance wide, so it fades out
-within a few centimetres, and added to the AU as one more shape (``fit.<AU>``, split between
-the sides as the table's midline shapes are).
+true``), the difference between the reference's motion of the landmarks (:data:`LANDMARKS`;
+inter-ocular distances, ``data/ict_landmark_motion.json``, written by ``scripts/calibrate.py
+landmarks``) and the head's is spread over the skin by Gaussian radial basis functions under
+half an inter-ocular distance wide, so it fades out within a few centimetres, and added to
+the AU as one more shape (``fit.<AU>``, split between the sides as the table's midline
+shapes are).
 """
 
 from __future__ import annotations
@@ -26,14 +26,14 @@ import numpy as np
 from mimika.face.head import MeshObject
 from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet
 
-#: the landmarks matched: brows, nose, eyes and mouth — not the jaw's outline (0–16, a
-#: silhouette, where each mesh's cheek turns away) nor the upper lip's inner edge (61–63):
-#: where a mesh's closed lips touch, both lips' inner edges lie at one point, which a smooth
-#: field moves as one; the lower lip's is matched (it keeps the lower teeth hidden in a
-#: smile) and the upper lip's follows the outer edge
-LANDMARKS = np.r_[17:61, 64:68]
-#: width of the radial basis functions, in inter-ocular distances
-SIGMA = 0.3
+#: the landmarks matched: all but the upper lip's inner edge (61–63): where a mesh's closed
+#: lips touch, both lips' inner edges lie at one point, which a smooth field moves as one;
+#: the lower lip's is matched (it keeps the lower teeth hidden in a smile) and the upper
+#: lip's follows the outer edge. The jaw's outline holds the cheeks: without it the field
+#: left a dent below the cheekbone that the key light showed as a bruise
+LANDMARKS = np.r_[0:61, 64:68]
+#: width of the radial basis functions, in inter-ocular distances (0.3 left a dent too)
+SIGMA = 0.45
 #: ridge on the basis matrix (neighbouring landmarks a few millimetres apart)
 RIDGE = 1e-3
 #: the prefix of the correction shapes' names
