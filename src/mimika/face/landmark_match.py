@@ -65,12 +65,13 @@ def correction(points: np.ndarray, anchors: np.ndarray, residual: np.ndarray,
 
 
 def match_landmarks(rig: BlendshapeRig, skin: MeshObject, landmarks: np.ndarray, iod: float,
-            shapes: ShapeSet, table: Mapping, codes: Sequence[str]
+            shapes: ShapeSet, table: Mapping, codes: Sequence[str], weight: np.ndarray
             ) -> tuple[ShapeSet, dict]:
     """``shapes`` and ``table`` with a correction shape per AU of ``codes``: ``rig`` is the
     head's rig built from them, ``skin`` its skin at rest in the frame its shapes move in,
-    ``landmarks`` (68,) the landmarks' skin vertices and ``iod`` its inter-ocular distance
-    (cm)."""
+    ``landmarks`` (68,) the landmarks' skin vertices, ``iod`` its inter-ocular distance (cm)
+    and ``weight`` (N,) how much of the correction each skin vertex takes (the skull and neck
+    none)."""
     ref = reference_motion()
     skin_name = skin.name
     anchors = np.asarray(landmarks)[LANDMARKS]
@@ -79,7 +80,7 @@ def match_landmarks(rig: BlendshapeRig, skin: MeshObject, landmarks: np.ndarray,
     table = copy.deepcopy(dict(table))
     for code in codes:
         residual = ref[code][LANDMARKS] * iod - rig.shape_deltas(code)[skin_name][anchors]
-        extra.append(correction(v, v[anchors], residual, SIGMA * iod))
+        extra.append(correction(v, v[anchors], residual, SIGMA * iod) * weight[:, None])
         names.append(PREFIX + code)
         table["aus"][code]["shapes"][PREFIX + code] = 1.0
     deltas = {}

@@ -135,7 +135,8 @@ def assemble(built: Built, character: Character, parts_of=None,
     codes = [c for c, e in table["aus"].items() if e.get("match_landmarks")]
     if codes:  # AUs that move the landmarks as ICT's actor does (face/landmark_match.py)
         iod = float(np.linalg.norm(np.asarray(a["eye_L"]) - np.asarray(a["eye_R"])))
-        shapes, table = match_landmarks(rig, bind_objs[0], lm, iod, shapes, table, codes)
+        shapes, table = match_landmarks(rig, bind_objs[0], lm, iod, shapes, table, codes,
+                                        _back_fade(bind_objs[0].vertices))
         rig = SkinnedRig(head, bind_head, shapes, table, skinning)
     return head, rig
 
@@ -145,6 +146,15 @@ def _shape_set(built: Built, scale: float) -> ShapeSet:
     names = tuple(n if n.startswith(ICT_STYLE) else arkit_to_table_name(n)
                   for n in built.shape_names)
     return ShapeSet(names, {k: v * scale for k, v in built.deltas.items()})
+
+
+def _back_fade(v: np.ndarray) -> np.ndarray:
+    """(N,) weights of head-frame vertices ``v``: 1 in front, fading to 0 behind the ears — as
+    on ICT itself (its table's ``still_back_z_cm``), generated shapes leave the skull and
+    neck still."""
+    z0, z1 = load_table("ict_aus.json")["still_back_z_cm"]
+    t = np.clip((np.asarray(v)[:, 2] - z0) / (z1 - z0), 0.0, 1.0)
+    return t * t * (3 - 2 * t)
 
 
 def _with_ict_style(built: Built) -> Built:
@@ -160,10 +170,7 @@ def _with_ict_style(built: Built) -> Built:
                       oriented=True)
     head = Head("bind", (skin,), _landmark_ids(sk.weld), {})
     shapes = generate_shapes(head)
-    # as on ICT itself (its table's still_back_z_cm): the fields fade out behind the ears
-    z0, z1 = load_table("ict_aus.json")["still_back_z_cm"]
-    t = np.clip((skin.vertices[:, 2] - z0) / (z1 - z0), 0.0, 1.0)
-    fade = (t * t * (3 - 2 * t))[:, None]
+    fade = _back_fade(skin.vertices)[:, None]
     n_base = len(built.base_vertices)
     dense = np.zeros((len(shapes), n_base, 3), np.float32)
     for k, per in enumerate(shapes.values()):
