@@ -22,6 +22,7 @@ from collections.abc import Mapping, Sequence
 from importlib import resources
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from mimika.face.head import MeshObject
 from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet
@@ -34,6 +35,9 @@ from mimika.face.rigs.blendshape import BlendshapeRig, ShapeSet
 LANDMARKS = np.r_[0:61, 64:68]
 #: width of the radial basis functions, in inter-ocular distances (0.3 left a dent too)
 SIGMA = 0.45
+#: the correction's reach beyond the landmarks: whole up to the first distance from the
+#: nearest one, none past the second (IOD)
+REACH = (0.25, 0.5)
 #: ridge on the basis matrix (neighbouring landmarks a few millimetres apart)
 RIDGE = 1e-3
 #: the prefix of the correction shapes' names
@@ -78,6 +82,11 @@ def match_landmarks(rig: BlendshapeRig, skin: MeshObject, landmarks: np.ndarray,
     v = skin.vertices
     names, extra = list(shapes.names), []
     table = copy.deepcopy(dict(table))
+    # the landmarks say nothing of the skin beyond them (the forehead, the scalp): the
+    # correction fades out between REACH[0] and REACH[1] IOD from the nearest one
+    near = cKDTree(v[anchors]).query(v)[0] / iod
+    t = np.clip((REACH[1] - near) / (REACH[1] - REACH[0]), 0.0, 1.0)
+    weight = np.asarray(weight) * t * t * (3 - 2 * t)
     for code in codes:
         residual = ref[code][LANDMARKS] * iod - rig.shape_deltas(code)[skin_name][anchors]
         extra.append(correction(v, v[anchors], residual, SIGMA * iod) * weight[:, None])
