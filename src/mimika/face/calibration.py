@@ -33,7 +33,8 @@ import numpy as np
 from mimika.face.head import Head
 
 __all__ = ["EXCEPTIONS", "EXTRA_AUS", "LID_AUS", "SEED_AUS", "TOLERANCE", "FaceFront",
-           "au_displacement", "au_motion", "eye_opening", "face_front", "landmark_motion",
+           "au_displacement", "au_motion", "eye_opening", "face_front", "inter_ocular",
+           "landmark_motion",
            "lid_motion", "lip_opening", "motion", "ratios", "shape_error"]
 
 #: the 22 AUs of seed 002 that move the face (its head and eye turns are rotations)
@@ -90,7 +91,7 @@ def face_front(head: Head) -> FaceFront:
     obj = head[head.landmark_object]
     v = obj.vertices.astype(np.float64)
     f = obj.faces.astype(np.int64)
-    iod = _iod(head)
+    iod = inter_ocular(head)
     mid = (np.asarray(head.anchors["eye_L"], np.float64)
            + np.asarray(head.anchors["eye_R"], np.float64)) / 2
     chin = head.landmark_points().astype(np.float64)[8]
@@ -118,10 +119,10 @@ def motion(displacement: np.ndarray, front: FaceFront) -> tuple[float, float]:
 def landmark_motion(displacement: np.ndarray, head: Head) -> np.ndarray:
     """The landmarks' displacements (68, 3) in IOD units, from per-vertex displacements (N, 3)
     of the head's landmark object."""
-    return np.asarray(displacement, np.float64)[head.landmarks] / _iod(head)
+    return np.asarray(displacement, np.float64)[head.landmarks] / inter_ocular(head)
 
 
-def _iod(head: Head) -> float:
+def inter_ocular(head: Head) -> float:
     """The head's inter-ocular distance (eye centre to eye centre, cm)."""
     return float(np.linalg.norm(np.asarray(head.anchors["eye_L"], np.float64)
                                 - np.asarray(head.anchors["eye_R"], np.float64)))
@@ -137,7 +138,7 @@ def lip_opening(rig, aus: Mapping[str, float], step: float = 0.001) -> float:
     o = head.landmark_object
     skin = np.asarray(rig.deform(aus)[o], np.float64)
     lm = skin[head.landmarks]
-    iod = _iod(head)
+    iod = inter_ocular(head)
     x0 = lm[[48, 54], 0].mean()
     cy, cz = lm[[62, 66], 1].mean(), lm[[62, 66], 2].min()
     f = np.concatenate([p.faces for p in head[o].parts])

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from mimika.face.calibration import inter_ocular
 from mimika.face.head import Head, MeshObject, Part
 from mimika.face.landmark_match import match_landmarks
 from mimika.face.makehuman import cache
@@ -134,9 +135,8 @@ def assemble(built: Built, character: Character, parts_of=None,
     rig = SkinnedRig(head, bind_head, shapes, table, skinning)
     codes = [c for c, e in table["aus"].items() if e.get("match_landmarks")]
     if codes:  # AUs that move the landmarks as ICT's actor does (face/landmark_match.py)
-        iod = float(np.linalg.norm(np.asarray(a["eye_L"]) - np.asarray(a["eye_R"])))
-        shapes, table = match_landmarks(rig, bind_objs[0], lm, iod, shapes, table, codes,
-                                        _back_fade(bind_objs[0].vertices))
+        shapes, table = match_landmarks(rig, bind_objs[0], lm, inter_ocular(head), shapes,
+                                        table, codes, _back_fade(bind_objs[0].vertices))
         rig = SkinnedRig(head, bind_head, shapes, table, skinning)
     return head, rig
 
