@@ -185,9 +185,10 @@ def settle_cloth(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: n
     """Make a fitted garment lie right, in place, as seen in the rest pose (bone transforms
     ``pose``): vertices sunk into the body (``body``, the posed base mesh, whose ``body_tris``
     are the whole body, hidden parts included) rest on it, then panels that cross others are
-    lifted clear of them (:mod:`.layers`). The moves are carried back to bind space through
-    each vertex's blended rotation. Returns how many positions moved."""
-    from mimika.face.makehuman.layers import layer_offsets, lift_over, welded
+    lifted clear of them and a panel crumpled through itself is smoothed (:mod:`.layers`). The
+    moves are carried back to bind space through each vertex's blended rotation. Returns how
+    many positions moved."""
+    from mimika.face.makehuman.layers import layer_offsets, lift_over, smooth_crumples, welded
     from mimika.face.makehuman.paint.regions import uv_islands
 
     tris = np.concatenate(list(cloth.parts.values()))
@@ -196,6 +197,7 @@ def settle_cloth(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: n
     pos, wtris, inv = welded(posed, tris)
     move = lift_over(pos, wtris, body, body_tris)
     move += layer_offsets(pos + move, wtris, islands)
+    move += smooth_crumples(pos + move, wtris, islands)
     moved = np.flatnonzero(np.abs(move).max(1) > 0)
     if not len(moved):
         return 0

@@ -7,6 +7,8 @@ body and lowering the arms pushes one through another, the renderer shows the cr
 torn, jagged edge. :func:`layer_cloth` finds the islands that cross, decides which one lies
 on top from where they do not cross (most of their overlap), and lifts the upper one clear of
 the lower one by a margin, with a smooth falloff so the panel stays a smooth surface.
+Where one island passes through itself (a crumpled collar tip), :func:`smooth_crumples`
+relaxes it.
 """
 
 from __future__ import annotations
@@ -88,6 +90,36 @@ def _island_of_vertex(tris: np.ndarray, lab: np.ndarray, n: int) -> sp.csr_matri
     m = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, lab.max() + 1)).tocsr()
     m.data[:] = 1.0
     return m
+
+
+def smooth_crumples(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *, rings: int = 2,
+                    steps: int = 4, rounds: int = 6) -> np.ndarray:
+    """Moves (N, 3) that smooth out the places where one island passes through itself (a
+    collar tip crumpled by fitting: neighbouring triangles folded over each other): their
+    vertices and ``rings`` rings around them are relaxed toward their neighbours' mean,
+    ``steps`` times a round, for up to ``rounds`` rounds while any crossing is left. Of the
+    rounds, the one that leaves the fewest crossings counts."""
+    v = np.asarray(v, np.float64)
+    n = len(v)
+    key = np.arange(n)
+    avg = _neighbour_mean(tris, n)
+    cur = v.copy()
+    fewest, best = np.inf, cur
+    for _ in range(rounds + 1):
+        i, j = intersecting_pairs(cur, tris, cur, tris, key_a=key, key_b=key)
+        same = (islands[i] == islands[j]) & (i < j)
+        if same.sum() < fewest:
+            fewest, best = int(same.sum()), cur.copy()
+        if not same.any():
+            break
+        sel = np.zeros(n)
+        sel[tris[np.r_[i[same], j[same]]].ravel()] = 1.0
+        for _ in range(rings):
+            sel = np.maximum(sel, (avg @ sel > 0).astype(float))
+        w = sel[:, None]
+        for _ in range(steps):
+            cur = cur + 0.5 * w * (avg @ cur - cur)
+    return best - v
 
 
 def layer_offsets(v: np.ndarray, tris: np.ndarray, islands: np.ndarray, *,
