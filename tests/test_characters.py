@@ -114,6 +114,18 @@ def test_character_file_extends_a_preset(tmp_path):
     assert c.hair is None and c.clothes == base.clothes and c.name == "older"
 
 
+def test_two_characters_differing_only_in_name_are_loaded_apart(tmp_path):
+    """The paint's noise is seeded by the name: a process that loaded one character must not
+    hand out its textures for another that differs only in its name (they shared them)."""
+    from mimika.face.makehuman.character_file import load_character_spec
+
+    for n in ("anna", "bella"):
+        (tmp_path / f"{n}.yaml").write_text(f"extends: mei\nname: {n}\n")
+    a, b = (load_character_spec(str(tmp_path / f"{n}.yaml")) for n in ("anna", "bella"))
+    assert a.geometry_key() == b.geometry_key()  # one cached geometry serves both
+    assert a.key() != b.key()
+
+
 def test_a_file_name_with_spaces_and_accents_is_never_held_against_the_user(tmp_path):
     from mimika.face.makehuman.character_file import load_character_spec
 

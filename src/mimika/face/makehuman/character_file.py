@@ -109,8 +109,9 @@ class Character:
         return hashlib.sha1(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
     def key(self) -> str:
-        """A hash of everything that shapes the character: geometry and paint."""
-        d = [self.geometry_key(), self.skin, self.eyes, self.hair_color]
+        """A hash of everything that shapes the character: geometry and paint (whose noise —
+        pores, strands, iris fibres, fabric — is seeded by the name)."""
+        d = [self.geometry_key(), self.name, self.skin, self.eyes, self.hair_color]
         return hashlib.sha1(json.dumps(d).encode()).hexdigest()[:16]
 
 
