@@ -4,7 +4,7 @@ A garment's panels (collar, lapels, front panels, sleeves) are separate UV islan
 mesh, laid one over another. Where the asset itself lets an upper panel dip under a lower one
 (female_elegantsuit01's right collar wing runs through the jacket front), or where fitting to a
 body and lowering the arms pushes one through another, the renderer shows the crossing as a
-torn, jagged edge. :func:`layer_cloth` finds the islands that cross, decides which one lies
+torn, jagged edge. :func:`layer_offsets` finds the islands that cross, decides which one lies
 on top from where they do not cross (most of their overlap), and lifts the upper one clear of
 the lower one by a margin, with a smooth falloff so the panel stays a smooth surface.
 Where one island passes through itself (a crumpled collar tip), :func:`smooth_crumples`
