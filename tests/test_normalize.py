@@ -42,6 +42,11 @@ EN = [
     ("1,000 people", "1,000 people"),
     ("£2bn deal", "2 billion pounds deal"),
     ("call 555-1999", "call 555-1999"),
+    ("On 3/10/2024 at 14:30", "On March tenth, twenty twenty-four at fourteen thirty"),
+    ("at 7:05 p.m. Then", "at seven oh five p m. Then"),
+    ("at 7:05 p.m. sharp", "at seven oh five p m sharp"),
+    ("The ratio was 1:25.", "The ratio was 1:25."),
+    ("13/10/2024", "13/10/2024"),
 ]
 
 DE = [
@@ -63,6 +68,12 @@ DE = [
     ("5 Mio. €", "5 Millionen Euro"),
     ("50 % mehr", "50 Prozent mehr"),
     ("Das Spiel endete 3:1. Danach", "Das Spiel endete 3:1. Danach"),
+    ("um 14:30 Uhr", "um vierzehn Uhr dreißig"),
+    ("gegen 9:45 kam er", "gegen neun Uhr fünfundvierzig kam er"),
+    ("am 01.01.2025 um 20.15 Uhr", "am ersten Januar zweitausendfünfundzwanzig um zwanzig Uhr "
+     "fünfzehn"),
+    ("Der 3.10.2024 war", "Der dritte Oktober zweitausendvierundzwanzig war"),
+    ("Es kostet 14.30 Euro.", "Es kostet 14.30 Euro."),
 ]
 
 PL = [
@@ -78,8 +89,18 @@ PL = [
     ("1 zł", "1 złoty"),
     ("22 zł", "22 złote"),
     ("50% więcej", "50 procent więcej"),
-    ("w 1999 r. było", "w 1999 roku było"),
-    ("w 1999 roku", "w 1999 roku"),
+    ("w 1999 r. było", "w tysiąc dziewięćset dziewięćdziesiątym dziewiątym roku było"),
+    ("w 1999 roku", "w tysiąc dziewięćset dziewięćdziesiątym dziewiątym roku"),
+    ("od 2020 r. do 2024 roku", "od dwa tysiące dwudziestego roku do dwa tysiące "
+     "dwudziestego czwartego roku"),
+    ("w 2000 roku", "w dwutysięcznym roku"),
+    ("Rok 1999 był", "Rok tysiąc dziewięćset dziewięćdziesiąty dziewiąty był"),
+    ("3 października 2024 r. o godz. 14:30", "trzeciego października dwa tysiące dwudziestego "
+     "czwartego roku o godzinie czternastej trzydzieści"),
+    ("3.10.2024 r.", "trzeciego października dwa tysiące dwudziestego czwartego roku."),
+    ("o godz. 8 rano", "o godzinie ósmej rano"),
+    ("Spotkanie o 14:30.", "Spotkanie o czternastej trzydzieści."),
+    ("Mecz skończył się 2:1.", "Mecz skończył się 2:1."),
     ("$5 i €20", "5 dolarów i 20 euro"),
     ("Np. tak", "Na przykład tak"),
 ]
@@ -103,13 +124,14 @@ def test_polish_corpus(text: str, expected: str) -> None:
 SAY_AS = [
     ("10/03/2024", "date", "en", None, "October third, twenty twenty-four"),
     ("10/03/2024", "date", "de", None, "zehnter März zweitausendvierundzwanzig"),
-    ("10.03.2024", "date", "pl", None, "dziesiątego marca dwa tysiące dwadzieścia cztery"),
+    ("10.03.2024", "date", "pl", None, "dziesiątego marca dwa tysiące dwudziestego czwartego"),
     ("2024-03-10", "date", "en", "ymd", "March tenth, twenty twenty-four"),
     ("2024-03-10", "date", "de", "ymd", "zehnter März zweitausendvierundzwanzig"),
-    ("2024-03-10", "date", "pl", "ymd", "dziesiątego marca dwa tysiące dwadzieścia cztery"),
+    ("2024-03-10", "date", "pl", "ymd", "dziesiątego marca dwa tysiące dwudziestego czwartego"),
     ("12/25", "date", "en", "md", "December twenty-fifth"),
     ("03/1999", "date", "de", "my", "März neunzehnhundertneunundneunzig"),
-    ("03/1999", "date", "pl", "my", "marzec tysiąc dziewięćset dziewięćdziesiąt dziewięć"),
+    ("03/1999", "date", "pl", "my",
+     "marzec tysiąc dziewięćset dziewięćdziesiątego dziewiątego"),
     ("14:30", "time", "en", None, "fourteen thirty"),
     ("9:05", "time", "en", None, "nine oh five"),
     ("9:00 pm", "time", "en", None, "nine o'clock p m"),
@@ -126,7 +148,7 @@ SAY_AS = [
     ("1234", "cardinal", "pl", None, "tysiąc dwieście trzydzieści cztery"),
     ("1,234", "cardinal", "en", None, "one thousand two hundred thirty-four"),
     ("-7", "cardinal", "de", None, "minus sieben"),
-    ("10/03/2024", "date", "pl", None, "dziesiątego marca dwa tysiące dwadzieścia cztery"),
+    ("10/03/2024", "date", "pl", None, "dziesiątego marca dwa tysiące dwudziestego czwartego"),
     ("ABC", "characters", "en", None, "A B C"),
     ("A1c", "characters", "de", None, "A 1 c"),
     ("XYZ", "characters", "pl", None, "X Y Z"),
@@ -239,7 +261,8 @@ def test_no_break_after_needs_a_dot() -> None:
      ["Mr.", "$3.5 million", "1999", "No.", "e.g.", "%"]),
     ("Am 3. Oktober 1999 zahlte Dr. Müller z. B. €20.", "de",
      ["3.", "1999", "Dr.", "z. B.", "€20"]),
-    ("W 2020 r. dr Nowak zapłacił np. 5 mln zł.", "pl", ["r.", "dr", "np.", "5 mln zł"]),
+    ("W 2020 r. dr Nowak zapłacił np. 5 mln zł.", "pl", ["2020", "r.", "dr", "np.", "5 mln zł"]),
+    ("Um 14:30 Uhr am 1.1.2025", "de", ["14:30 Uhr", "1.1.2025"]),
 ])
 def test_span_offsets_point_at_the_original_text(text: str, lang: str,
                                                  written: list[str]) -> None:

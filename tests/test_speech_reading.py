@@ -22,6 +22,12 @@ def _said(text, lang, **kw):
     ("de", "Frag Dr. Weber z. B. morgen.", "Frag Doktor Weber zum Beispiel morgen."),
     ("pl", "Zapłacił 2 mln zł.", "Zapłacił 2 miliony złotych."),
     ("pl", "Spytaj np. prof. Nowaka.", "Spytaj na przykład profesor Nowaka."),
+    ("de", "Um 14:30 Uhr am 1.1.2025.", "Um vierzehn Uhr dreißig am ersten Januar "
+     "zweitausendfünfundzwanzig."),
+    ("pl", "W 1999 r. o godz. 8 padało.", "W tysiąc dziewięćset dziewięćdziesiątym "
+     "dziewiątym roku o godzinie ósmej padało."),
+    ("en", "We met at 7:05 p.m. on 3/10/2024.", "We met at seven oh five p m on March tenth, "
+     "twenty twenty-four."),
 ])
 def test_the_voice_says_what_a_newsreader_says(lang, written, spoken):
     assert _said(written, lang) == _said(spoken, lang)
@@ -30,7 +36,7 @@ def test_the_voice_says_what_a_newsreader_says(lang, written, spoken):
 @pytest.mark.parametrize(("lang", "date", "reading"), [
     ("en", "10/03/2024", "October third, twenty twenty-four"),
     ("de", "10/03/2024", "zehnter März zweitausendvierundzwanzig"),
-    ("pl", "10/03/2024", "dziesiątego marca dwa tysiące dwadzieścia cztery"),
+    ("pl", "10/03/2024", "dziesiątego marca dwa tysiące dwudziestego czwartego"),
 ])
 def test_say_as_date_is_read_as_a_date(lang, date, reading):
     doc = f'<speak>Heute <say-as interpret-as="date">{date}</say-as>.</speak>'
@@ -46,6 +52,19 @@ def test_say_as_time_ordinal_telephone():
            '<say-as interpret-as="telephone">0171 234</say-as></speak>')
     plain = "<speak>At nine oh five the third call: 0 1 7 1, 2 3 4</speak>"
     assert _said(doc, "en", ssml=True) == _said(plain, "en", ssml=True)
+
+
+def test_times_dates_and_years_keep_their_words_as_written():
+    """A reading spans what it reads ("14:30 Uhr" is one word, as "z. B." is); no sentence
+    ends inside a date or after "godz."."""
+    u = synthesize("Um 14:30 Uhr am 1.1.2025 sprach er. Danach ging er.", lang="de",
+                   engine="espeak")
+    assert [w.text for w in u.words][:5] == ["Um", "14:30 Uhr", "am", "1.1.2025", "sprach"]
+    assert [s.text for s in u.sentences] == ["Um 14:30 Uhr am 1.1.2025 sprach er.",
+                                             "Danach ging er."]
+    u = synthesize("O godz. 14:30 w 1999 r. padało. Potem nie.", lang="pl", engine="espeak")
+    assert [w.text for w in u.words][:5] == ["O godz.", "14:30", "w", "1999", "r."]
+    assert [s.text for s in u.sentences] == ["O godz. 14:30 w 1999 r. padało.", "Potem nie."]
 
 
 def test_german_ordinals_and_abbreviations_do_not_end_sentences():

@@ -1,10 +1,13 @@
 """Text normalisation: the words a newsreader says for what is written, in en / de / pl.
 
 espeak-ng reads plain digits well, but not currency symbols before a number ("$3.5 million"),
-German ordinals ("am 3. Oktober"), abbreviations ("z. B.", "np.") or German years
-("1999" as *neunzehnhundertneunundneunzig*). :func:`spans` finds those places, each with
-its character offsets in the original text and its spoken form; :func:`spoken_text` is the
-text the TTS is given. :func:`say_as` reads SSML ``<say-as>`` content and
+German ordinals ("am 3. Oktober"), abbreviations ("z. B.", "np."), German years ("1999" as
+*neunzehnhundertneunundneunzig*), Polish years and days, which are ordinals in their case
+("w 1999 r." as *w tysiąc dziewięćset dziewięćdziesiątym dziewiątym roku*, "3 października"
+as *trzeciego października*), clock times ("um 14:30 Uhr" as *vierzehn Uhr dreißig*, not
+*vierzehn Uhr dreißig Uhr*) or dates in digits ("am 1.1.2025", "3/10/2024"). :func:`spans`
+finds those places, each with its character offsets in the original text and its spoken form;
+:func:`spoken_text` is the text the TTS is given. :func:`say_as` reads SSML ``<say-as>`` content and
 :func:`no_break_after` tells whether a ``.`` ends a sentence.
 
 Number words (cardinals and ordinals, 0–999 999 999) are written here: ``num2words`` is not a
@@ -188,8 +191,8 @@ def _pl_ordinal_parts(n: int, t: Table) -> list[tuple[str, bool]]:
     if hundreds:
         head = [(_pl_cardinal(thousands, t), False)] if thousands else []
         return [*head, (t["ordinal_hundreds"][hundreds], True)]
-    if n == 1000:
-        return [(t["ordinal_thousand"], True)]
+    if n % 1000 == 0 and 1 <= n // 1000 < len(t["ordinal_thousands"]):
+        return [(t["ordinal_thousands"][n // 1000], True)]
     if n == 0:
         return [(t["ordinal_ones"][0], True)]
     return [(_pl_cardinal(n, t), False)]
@@ -224,7 +227,7 @@ def ordinal_words(n: int, lang: str, form: str = "") -> str:
     """The ordinal ``n`` in words.
 
     ``form`` is the German ending ("e", "en", "er"; default "e") or the Polish case
-    ("nom", "gen", "fem"; default "nom"); English ignores it.
+    ("nom", "gen", "loc", "fem", "fem_obl"; default "nom"); English ignores it.
     """
     table = _table(lang)
     if table is None or n < 0:
@@ -418,9 +421,103 @@ def _abbreviation_spans(text: str, table: Table) -> Iterator[Span]:
         yield Span(a.start, a.end, spoken)
 
 
+def _previous_word(text: str, start: int) -> str:
+    """The word (with a trailing ".", lower case) just before ``text[start:]``."""
+    m = re.search(r"([^\W\d_]+\.?)\s*$", text[:start])
+    return m[1].lower() if m else ""
+
+
+def _time_spans(text: str, table: Table) -> Iterator[Span]:
+    """Clock times: "um 14:30 Uhr", "at 7:05 p.m.", "o godz. 14:30" — where the words
+    around say it is a time (a score "3:1" or a ratio is left alone)."""
+    t, base = table["time"], table["_lang"]
+    pattern = (r"(?<![\w.,:])(?P<h>\d{1,2})(?P<sep>[:.])(?P<m>\d{2})"
+               r"(?:\s?(?P<ampm>[ap]\.?m\.?)(?!\w))?(?P<uhr>\s+Uhr\b)?(?![\w:]|[.,]\d)")
+    for m in re.finditer(pattern, text, re.IGNORECASE if base == "en" else 0):
+        previous = _previous_word(text, m.start())
+        if int(m["h"]) > 24 or int(m["m"]) > 59:
+            continue
+        if base == "de" and not (m["uhr"] or (m["sep"] == ":" and previous in t["after"])):
+            continue
+        if base == "en" and not (m["sep"] == ":" and (m["ampm"] or previous in t["after"])):
+            continue
+        if base == "pl" and m["sep"] != ":":
+            continue
+        form = "fem_obl" if previous in t.get("oblique_after", ()) else "fem"
+        clock = f"{m['h']}:{m['m']}" + (f" {m['ampm']}" if m["ampm"] else "")
+        end = m.end() if base == "de" or m["ampm"] is None or not m["ampm"].endswith(".") \
+            or not _starts_sentence(text, m.end()) else m.end() - 1
+        yield Span(m.start(), end, _say_time(clock, table, base, form))
+    if base == "pl":  # "o godz. 8": the hour alone
+        for m in re.finditer(r"(?<=godz\.)\s*(\d{1,2})(?![\d:.,]|\.\d)", text):
+            if int(m[1]) <= 24:
+                yield Span(m.start(1), m.end(1), _say_time(f"{m[1]}:00", table, base, "fem_obl"))
+
+
+def _pl_year(year: int, table: Table, form: str) -> str:
+    """A Polish year as an ordinal in ``form``: *dwa tysiące dwudziestego czwartego*,
+    *dwutysięcznym*."""
+    return _pl_ordinal(year, table["numbers"], form)
+
+
+def _pl_year_spans(text: str, table: Table) -> Iterator[Span]:
+    """Polish years are ordinals: "w 1999 r." → *w tysiąc dziewięćset dziewięćdziesiątym
+    dziewiątym roku* (locative after *w*, *po*), "od 2020 roku", "3 października 2024"
+    (genitive), "rok 1999" (nominative)."""
+    rules = table.get("years_ordinal")
+    if rules is None:
+        return
+    before = _alternation(rules["before"])
+    months = _alternation(table["months_genitive"])
+    for m in re.finditer(r"(?<![\w.,:/])(\d{4})(?![\w%]|[.,:/]\d)", text):
+        previous = _previous_word(text, m.start())
+        after_month = re.search(rf"(?:{months})\s+$", text[:m.start()])
+        if after_month:
+            form = "gen"
+        elif previous in rules["after"]:  # "rok 1999", "do końca roku 2024"
+            form = rules["after"][previous]
+        elif re.match(rf"\s*(?:{before})(?!\w)", text[m.end():]):
+            form = "loc" if previous in rules["loc_after"] else "gen"
+        else:
+            continue
+        yield Span(m.start(), m.end(), _pl_year(int(m[1]), table, form))
+
+
+def _pl_day_spans(text: str, table: Table) -> Iterator[Span]:
+    """A Polish day before a month is an ordinal in the genitive: "3 października" →
+    *trzeciego października*."""
+    if "months_genitive" not in table:
+        return
+    months = _alternation(table["months_genitive"])
+    for m in re.finditer(rf"(?<![\w.,:/])(\d{{1,2}})(?=\s+(?:{months})(?!\w))", text):
+        if 1 <= int(m[1]) <= 31:
+            yield Span(m.start(), m.end(), ordinal_words(int(m[1]), "pl", "gen"))
+
+
+def _numeric_date_spans(text: str, table: Table) -> Iterator[Span]:
+    """Dates in digits: "am 1.1.2025" (de), "3.10.2024 r." (pl), "3/10/2024" (en, month
+    first) — read with the month's name, as :func:`say_as` reads a date."""
+    base = table["_lang"]
+    pattern = r"(?<![\w/])(\d{1,2})/(\d{1,2})/(\d{4})(?![\w/])" if base == "en" else \
+        r"(?<![\w.,:/])(\d{1,2})\.(\d{1,2})\.(\d{4})(?![\w%]|[.,]\d)"
+    for m in re.finditer(pattern, text):
+        values = dict(zip(table["date_format"], map(int, m.groups()), strict=True))
+        if not (1 <= values["m"] <= 12 and 1 <= values["d"] <= 31):
+            continue
+        spoken = _date_words(values, table, base)
+        if base == "de":  # the day's ending from the word before it: "am ersten Januar"
+            rules = table["ordinals"]
+            ending = rules["endings"].get(_previous_word(text, m.start()),
+                                          rules["before_month"])
+            day = _de_ordinal_stem(values["d"], table["numbers"]) + ending
+            spoken = " ".join([day, *spoken.split(" ")[1:]])
+        yield Span(m.start(), m.end(), spoken)
+
+
 _RULES: tuple[Callable[[str, Table], Iterator[Span]], ...] = (
-    _currency_spans, _percent_spans, _de_ordinal_spans, _abbreviation_spans, _scale_spans,
-    _year_spans, _en_ordinal_spans,
+    _numeric_date_spans, _time_spans, _currency_spans, _percent_spans, _de_ordinal_spans,
+    _abbreviation_spans, _scale_spans, _year_spans, _pl_year_spans, _pl_day_spans,
+    _en_ordinal_spans,
 )
 
 
@@ -522,7 +619,8 @@ def _date_words(values: dict[str, int], table: Table, lang: str) -> str:
     else:
         months = table["months_genitive"] if day else table["months"]
         words = [ordinal_words(day, lang, "gen") if day else None,
-                 months[month - 1] if month else None, year_text]
+                 months[month - 1] if month else None,
+                 _pl_year(year, table, "gen") if year is not None else None]
     return " ".join(w for w in words if w)
 
 
@@ -538,7 +636,9 @@ def _say_date(text: str, table: Table, lang: str, format: str | None) -> str:
     return _date_words(values, table, lang)
 
 
-def _say_time(text: str, table: Table, lang: str) -> str:
+def _say_time(text: str, table: Table, lang: str, form: str = "fem") -> str:
+    """``text`` (14:30, 9:05 pm) read as a time; ``form``: the Polish hour's case ("fem",
+    "fem_obl" after *o*, *od*, *do*: *o czternastej*)."""
     m = re.fullmatch(r"\s*(\d{1,2})[:.h](\d{2})\s*([ap]\.?m\.?)?\s*", text, re.IGNORECASE)
     if m is None or int(m[1]) > 24 or int(m[2]) > 59:
         raise ParameterError(f"say-as time: {text!r} is not a time such as 14:30")
@@ -558,7 +658,7 @@ def _say_time(text: str, table: Table, lang: str) -> str:
             cardinal_words(0, lang)
         minutes = f" {cardinal_words(minute, lang)}" if minute else ""
         return f"{hour_word} {t['hour']}{minutes}"
-    hour_word = ordinal_words(hour, lang, "fem") if hour else t["midnight"]
+    hour_word = ordinal_words(hour, lang, form) if hour else t["midnight"]
     if not minute:
         return hour_word
     minutes = cardinal_words(minute, lang)
