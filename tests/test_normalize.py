@@ -111,6 +111,11 @@ def test_english_corpus(text: str, expected: str) -> None:
     assert spoken_text(text, "en-us") == expected
 
 
+def test_british_english_dates_put_the_day_first() -> None:
+    assert spoken_text("On 3/10/2024.", "en-gb") == "On October third, twenty twenty-four."
+    assert say_as("10/03/2024", "date", "en-gb") == "March tenth, twenty twenty-four"
+
+
 @pytest.mark.parametrize(("text", "expected"), DE)
 def test_german_corpus(text: str, expected: str) -> None:
     assert spoken_text(text, "de") == expected

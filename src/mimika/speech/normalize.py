@@ -521,9 +521,20 @@ _RULES: tuple[Callable[[str, Table], Iterator[Span]], ...] = (
 )
 
 
+def _date_format(table: Table, lang: str) -> str:
+    """The order of day, month and year in ``lang``'s dates: the language's, or its region's
+    (British English writes the day first)."""
+    code = lang.replace("_", "-").lower()
+    for region, fmt in table.get("date_format_regions", {}).items():
+        if code.startswith(region):
+            return fmt
+    return table["date_format"]
+
+
 def _lang_table(lang: str) -> Table | None:
     table = _table(lang)
-    return None if table is None else {**table, "_lang": _base(lang)}
+    return None if table is None else {**table, "_lang": _base(lang),
+                                       "date_format": _date_format(table, lang)}
 
 
 def spans(text: str, lang: str) -> list[Span]:
@@ -625,7 +636,7 @@ def _date_words(values: dict[str, int], table: Table, lang: str) -> str:
 
 
 def _say_date(text: str, table: Table, lang: str, format: str | None) -> str:
-    fmt = (format or table["date_format"]).lower()
+    fmt = (format or _date_format(table, lang)).lower()
     numbers = re.findall(r"\d+", text)
     if not fmt or set(fmt) - set("dmy") or len(set(fmt)) != len(fmt) or len(numbers) != len(
             fmt):
