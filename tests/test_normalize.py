@@ -101,6 +101,8 @@ PL = [
     ("o godz. 8 rano", "o godzinie ósmej rano"),
     ("Spotkanie o 14:30.", "Spotkanie o czternastej trzydzieści."),
     ("Mecz skończył się 2:1.", "Mecz skończył się 2:1."),
+    ("wyniosła 4,9 proc. w maju", "wyniosła 4,9 procent w maju"),
+    ("To 5 proc. Potem", "To 5 procent. Potem"),
     ("$5 i €20", "5 dolarów i 20 euro"),
     ("Np. tak", "Na przykład tak"),
 ]
