@@ -114,8 +114,9 @@ def test_english_corpus(text: str, expected: str) -> None:
 
 
 def test_british_english_dates_put_the_day_first() -> None:
-    assert spoken_text("On 3/10/2024.", "en-gb") == "On October third, twenty twenty-four."
-    assert say_as("10/03/2024", "date", "en-gb") == "March tenth, twenty twenty-four"
+    assert spoken_text("On 3/10/2024.", "en-gb") == "On the third of October, twenty twenty-four."
+    assert say_as("10/03/2024", "date", "en-gb") == "the tenth of March, twenty twenty-four"
+    assert say_as("10/03", "date", "en-gb", "dm") == "the tenth of March"
 
 
 @pytest.mark.parametrize(("text", "expected"), DE)

@@ -504,7 +504,7 @@ def _numeric_date_spans(text: str, table: Table) -> Iterator[Span]:
         values = dict(zip(table["date_format"], map(int, m.groups()), strict=True))
         if not (1 <= values["m"] <= 12 and 1 <= values["d"] <= 31):
             continue
-        spoken = _date_words(values, table, base)
+        spoken = _date_words(values, table, table["_code"])
         if base == "de":  # the day's ending from the word before it: "am ersten Januar"
             rules = table["ordinals"]
             ending = rules["endings"].get(_previous_word(text, m.start()),
@@ -533,7 +533,7 @@ def _date_format(table: Table, lang: str) -> str:
 
 def _lang_table(lang: str) -> Table | None:
     table = _table(lang)
-    return None if table is None else {**table, "_lang": _base(lang),
+    return None if table is None else {**table, "_lang": _base(lang), "_code": lang,
                                        "date_format": _date_format(table, lang)}
 
 
@@ -619,6 +619,9 @@ def _date_words(values: dict[str, int], table: Table, lang: str) -> str:
     base = _base(lang)
     year_text = year_words(year, lang) if year is not None else None
     if base == "en":
+        if day and month and _date_format(table, lang).startswith("d"):  # British
+            head = f"the {ordinal_words(day, lang)} of {table['months'][month - 1]}"
+            return f"{head}, {year_text}" if year_text else head
         head = " ".join(w for w in (
             table["months"][month - 1] if month else None,
             ordinal_words(day, lang) if day else None) if w)
