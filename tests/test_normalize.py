@@ -47,6 +47,9 @@ EN = [
     ("at 7:05 p.m. sharp", "at seven oh five p m sharp"),
     ("The ratio was 1:25.", "The ratio was 1:25."),
     ("13/10/2024", "13/10/2024"),
+    ("the 1990s and the '80s", "the nineteen nineties and the eighties"),
+    ("the 2000s, the 2010s", "the two thousands, the twenty tens"),
+    ("since 2024-03-10.", "since March tenth, twenty twenty-four."),
 ]
 
 DE = [
@@ -74,6 +77,7 @@ DE = [
      "fünfzehn"),
     ("Der 3.10.2024 war", "Der dritte Oktober zweitausendvierundzwanzig war"),
     ("Es kostet 14.30 Euro.", "Es kostet 14.30 Euro."),
+    ("in den 1990er Jahren, die 20er", "in den neunzehnhundertneunziger Jahren, die zwanziger"),
 ]
 
 PL = [

@@ -496,12 +496,16 @@ def _pl_day_spans(text: str, table: Table) -> Iterator[Span]:
 
 def _numeric_date_spans(text: str, table: Table) -> Iterator[Span]:
     """Dates in digits: "am 1.1.2025" (de), "3.10.2024 r." (pl), "3/10/2024" (en, month
-    first) — read with the month's name, as :func:`say_as` reads a date."""
+    first), "2024-03-10" (every language) — read with the month's name, as :func:`say_as`
+    reads a date."""
     base = table["_lang"]
     pattern = r"(?<![\w/])(\d{1,2})/(\d{1,2})/(\d{4})(?![\w/])" if base == "en" else \
         r"(?<![\w.,:/])(\d{1,2})\.(\d{1,2})\.(\d{4})(?![\w%]|[.,]\d)"
-    for m in re.finditer(pattern, text):
-        values = dict(zip(table["date_format"], map(int, m.groups()), strict=True))
+    iso = r"(?<![\w.,:/-])(\d{4})-(\d{2})-(\d{2})(?![\w/-])"
+    found = [(m, table["date_format"]) for m in re.finditer(pattern, text)]
+    found += [(m, "ymd") for m in re.finditer(iso, text)]
+    for m, fmt in found:
+        values = dict(zip(fmt, map(int, m.groups()), strict=True))
         if not (1 <= values["m"] <= 12 and 1 <= values["d"] <= 31):
             continue
         spoken = _date_words(values, table, table["_code"])
@@ -514,10 +518,30 @@ def _numeric_date_spans(text: str, table: Table) -> Iterator[Span]:
         yield Span(m.start(), m.end(), spoken)
 
 
+def _decade_spans(text: str, table: Table) -> Iterator[Span]:
+    """Decades: "the 1990s", "the '80s" → *the nineteen nineties*, *the eighties*; German
+    "1990er", "20er" → *neunzehnhundertneunziger*, *zwanziger*."""
+    base = table["_lang"]
+    if base not in ("en", "de"):
+        return
+    suffix = "s" if base == "en" else "er"
+    for m in re.finditer(rf"(?<![\w.,])'?(\d{{2}}|\d{{4}})'?{suffix}(?![^\W_])", text):
+        n = int(m[1])
+        if n % 10:
+            continue
+        words = year_words(n, base) if len(m[1]) == 4 else cardinal_words(n, base)
+        if base == "de":
+            yield Span(m.start(), m.end(), words + "er")
+            continue
+        head, _, last = words.rpartition(" ")
+        last = last[:-1] + "ies" if last.endswith("y") else last + "s"
+        yield Span(m.start(), m.end(), f"{head} {last}".strip())
+
+
 _RULES: tuple[Callable[[str, Table], Iterator[Span]], ...] = (
-    _numeric_date_spans, _time_spans, _currency_spans, _percent_spans, _de_ordinal_spans,
-    _abbreviation_spans, _scale_spans, _year_spans, _pl_year_spans, _pl_day_spans,
-    _en_ordinal_spans,
+    _numeric_date_spans, _time_spans, _decade_spans, _currency_spans, _percent_spans,
+    _de_ordinal_spans, _abbreviation_spans, _scale_spans, _year_spans, _pl_year_spans,
+    _pl_day_spans, _en_ordinal_spans,
 )
 
 
