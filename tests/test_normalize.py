@@ -50,6 +50,8 @@ EN = [
     ("the 1990s and the '80s", "the nineteen nineties and the eighties"),
     ("the 2000s, the 2010s", "the two thousands, the twenty tens"),
     ("since 2024-03-10.", "since March tenth, twenty twenty-four."),
+    ("The $3.5 million deal", "The 3.5 million dollar deal"),
+    ("a $5 fine, the $3 million was spent", "a 5 dollar fine, the 3 million dollars was spent"),
 ]
 
 DE = [

@@ -301,8 +301,20 @@ def _currency_spans(text: str, table: Table) -> Iterator[Span]:
             if m["scale"]:
                 words.append(_plural(scales[m["scale"]], value))
                 value = 0  # "5 million dollars", "5 mln złotych"
+            if _attributive(text, m.start(), m.end(), table):
+                value = 1  # "a 3.5 million dollar deal"
             words.append(_plural(currencies[m["sym"]], value))
             yield Span(m.start(), m.end(), " ".join(words))
+
+
+def _attributive(text: str, start: int, end: int, table: Table) -> bool:
+    """Whether an amount stands before its noun ("a $3 million deal", "the $20 fee"), where
+    English names the currency in the singular."""
+    rules = table.get("attributive")
+    if rules is None or _previous_word(text, start) not in rules["after"]:
+        return False
+    following = re.match(r"\s+([a-z]+)\b", text[end:])
+    return bool(following) and following[1] not in rules["not_before"]
 
 
 def _percent_spans(text: str, table: Table) -> Iterator[Span]:
