@@ -109,6 +109,9 @@ PL = [
     ("Mecz skończył się 2:1.", "Mecz skończył się 2:1."),
     ("wyniosła 4,9 proc. w maju", "wyniosła 4,9 procent w maju"),
     ("To 5 proc. Potem", "To 5 procent. Potem"),
+    ("w latach 90. było", "w latach dziewięćdziesiątych było"),
+    ("Lata 80. minęły. Potem", "Lata osiemdziesiąte minęły. Potem"),
+    ("od lat 70-tych", "od lat siedemdziesiątych"),
     ("$5 i €20", "5 dolarów i 20 euro"),
     ("Np. tak", "Na przykład tak"),
 ]
@@ -238,7 +241,7 @@ NO_BREAK = [
     ("bzw. nicht", "de"), ("ca. 5 Meter", "de"), ("Nr. 5", "de"), ("Mr. Smith", "en"),
     ("Mrs. Smith", "en"), ("e.g. apples", "en"), ("i.e. pears", "en"), ("St. Paul", "en"),
     ("J. Smith", "en"), ("np. jabłka", "pl"), ("tzn. nie", "pl"), ("ul. Długa", "pl"),
-    ("pi is 3.14", "en"),
+    ("pi is 3.14", "en"), ("lata 80. minęły", "pl"), ("o godz. 8", "pl"),
 ]
 
 

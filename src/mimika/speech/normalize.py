@@ -532,9 +532,11 @@ def _numeric_date_spans(text: str, table: Table) -> Iterator[Span]:
 
 def _decade_spans(text: str, table: Table) -> Iterator[Span]:
     """Decades: "the 1990s", "the '80s" → *the nineteen nineties*, *the eighties*; German
-    "1990er", "20er" → *neunzehnhundertneunziger*, *zwanziger*."""
+    "1990er", "20er" → *neunzehnhundertneunziger*, *zwanziger*; Polish "w latach 90." →
+    *w latach dziewięćdziesiątych*."""
     base = table["_lang"]
-    if base not in ("en", "de"):
+    if base == "pl":
+        yield from _pl_decade_spans(text, table)
         return
     suffix = "s" if base == "en" else "er"
     for m in re.finditer(rf"(?<![\w.,])'?(\d{{2}}|\d{{4}})'?{suffix}(?![^\W_])", text):
@@ -548,6 +550,17 @@ def _decade_spans(text: str, table: Table) -> Iterator[Span]:
         head, _, last = words.rpartition(" ")
         last = last[:-1] + "ies" if last.endswith("y") else last + "s"
         yield Span(m.start(), m.end(), f"{head} {last}".strip())
+
+
+def _pl_decade_spans(text: str, table: Table) -> Iterator[Span]:
+    """Polish decades after a form of *lata*: an ordinal plural in its case."""
+    endings = table.get("decades", {})
+    words = _alternation(list(endings))
+    for m in re.finditer(rf"(?<!\w)({words})\s+(\d0)(\.|-(?:e|te|tych|ych))?(?!\w)", text,
+                         re.IGNORECASE):
+        stem = _pl_ordinal(int(m[2]), table["numbers"])[:-1]  # dziewięćdziesiąt(y)
+        final = "." if m[3] == "." and _starts_sentence(text, m.end()) else ""
+        yield Span(m.start(2), m.end(), stem + endings[m[1].lower()] + final)
 
 
 _RULES: tuple[Callable[[str, Table], Iterator[Span]], ...] = (
@@ -604,9 +617,9 @@ def spoken_text(text: str, lang: str) -> str:
 def no_break_after(text: str, pos: int, lang: str) -> bool:
     """True when a '.' at ``text[pos]`` does NOT end a sentence.
 
-    Decimal points, German ordinals before a noun or month ("am 3. Oktober"), abbreviations
-    ("Dr.", "z. B.", "np."; "usw."/"etc." only when the text goes on in lower case) and
-    single initials ("J. Smith").
+    Decimal points, German ordinals before a noun or month ("am 3. Oktober"), a number's dot
+    before a word in lower case ("w latach 90. było"), abbreviations ("Dr.", "z. B.", "np.";
+    "usw."/"etc." only when the text goes on in lower case) and single initials ("J. Smith").
     """
     if not 0 <= pos < len(text) or text[pos] != ".":
         return False
@@ -628,6 +641,9 @@ _NON_SPACE = re.compile(r"\S")
 def _no_break_after(text: str, pos: int, lang: str, more: bool) -> bool:
     """:func:`no_break_after` on the words around the '.'; ``more``: text follows them."""
     table = _lang_table(lang)
+    if pos and text[pos - 1].isdigit() and re.match(r"\s+[^\W\d_]", text[pos + 1:]) and \
+            text[pos + 1:].lstrip()[0].islower():
+        return True  # an ordinal's dot: "w latach 90. było", "am 3. oder 4. Mai"
     if table is not None:
         for a in _abbreviations(text, table):
             if a.start <= pos < a.end:
