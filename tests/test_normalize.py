@@ -51,6 +51,8 @@ EN = [
     ("the 2000s, the 2010s", "the two thousands, the twenty tens"),
     ("since 2024-03-10.", "since March tenth, twenty twenty-four."),
     ("The $3.5 million deal", "The 3.5 million dollar deal"),
+    ("Sen. Warren met Lt. Col. Smith Jr. today", "Senator Warren met Lieutenant Colonel Smith "
+     "Junior today"),
     ("a $5 fine, the $3 million was spent", "a 5 dollar fine, the 3 million dollars was spent"),
 ]
 
@@ -112,6 +114,9 @@ PL = [
     ("w latach 90. było", "w latach dziewięćdziesiątych było"),
     ("Lata 80. minęły. Potem", "Lata osiemdziesiąte minęły. Potem"),
     ("od lat 70-tych", "od lat siedemdziesiątych"),
+    ("m.in. posłowie, tj. 20, wg policji, w marcu br. Potem szkoła im. Kopernika",
+     "między innymi posłowie, to jest 20, według policji, w marcu bieżącego roku. Potem szkoła "
+     "imienia Kopernika"),
     ("$5 i €20", "5 dolarów i 20 euro"),
     ("Np. tak", "Na przykład tak"),
 ]
