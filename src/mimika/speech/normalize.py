@@ -457,19 +457,14 @@ def _time_spans(text: str, table: Table) -> Iterator[Span]:
             continue
         form = "fem_obl" if previous in t.get("oblique_after", ()) else "fem"
         clock = f"{m['h']}:{m['m']}" + (f" {m['ampm']}" if m["ampm"] else "")
-        end = m.end() if base == "de" or m["ampm"] is None or not m["ampm"].endswith(".") \
-            or not _starts_sentence(text, m.end()) else m.end() - 1
+        end = m.end()
+        if m["ampm"] and m["ampm"].endswith(".") and _starts_sentence(text, end):
+            end -= 1  # "p.m." ends the sentence too: its dot stays
         yield Span(m.start(), end, _say_time(clock, table, base, form))
     if base == "pl":  # "o godz. 8": the hour alone
         for m in re.finditer(r"(?<=godz\.)\s*(\d{1,2})(?![\d:.,]|\.\d)", text):
             if int(m[1]) <= 24:
                 yield Span(m.start(1), m.end(1), _say_time(f"{m[1]}:00", table, base, "fem_obl"))
-
-
-def _pl_year(year: int, table: Table, form: str) -> str:
-    """A Polish year as an ordinal in ``form``: *dwa tysiące dwudziestego czwartego*,
-    *dwutysięcznym*."""
-    return _pl_ordinal(year, table["numbers"], form)
 
 
 def _pl_year_spans(text: str, table: Table) -> Iterator[Span]:
@@ -492,7 +487,7 @@ def _pl_year_spans(text: str, table: Table) -> Iterator[Span]:
             form = "loc" if previous in rules["loc_after"] else "gen"
         else:
             continue
-        yield Span(m.start(), m.end(), _pl_year(int(m[1]), table, form))
+        yield Span(m.start(), m.end(), _pl_ordinal(int(m[1]), table["numbers"], form))
 
 
 def _pl_day_spans(text: str, table: Table) -> Iterator[Span]:
@@ -686,7 +681,7 @@ def _date_words(values: dict[str, int], table: Table, lang: str) -> str:
         months = table["months_genitive"] if day else table["months"]
         words = [ordinal_words(day, lang, "gen") if day else None,
                  months[month - 1] if month else None,
-                 _pl_year(year, table, "gen") if year is not None else None]
+                 _pl_ordinal(year, table["numbers"], "gen") if year is not None else None]
     return " ".join(w for w in words if w)
 
 
