@@ -77,6 +77,15 @@ def test_sentence_split_keeps_abbreviations():
                                  "Neu."]
 
 
+def test_a_sentence_may_end_with_etc_or_p_m():
+    """ "etc." and "p.m." end a sentence when a capitalised word follows (they were kept in
+    one, with no pause and one subtitle cue); "Jr." and "Inc." do not ("King Jr. Day")."""
+    s = split_sentences("It ended at 5 p.m. The crowd left, pears etc. and more. King Jr. Day "
+                        "came. Pears etc. Then apples.")
+    assert [x for x, _ in s] == ["It ended at 5 p.m.", "The crowd left, pears etc. and more.",
+                                 "King Jr. Day came.", "Pears etc.", "Then apples."]
+
+
 def test_empty_text_is_a_clear_error():
     with pytest.raises(ParameterError, match="text is empty"):
         synthesize("   ")

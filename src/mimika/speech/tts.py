@@ -36,6 +36,9 @@ _ABBREV = {
     "z.b", "bzw", "usw", "ca", "vgl", "hr", "fr", "str", "d.h", "u.a", "inż", "np", "ok",
     "tzn", "wg", "ul", "itd", "itp", "tj", "jr", "sr", "co", "inc", "ltd", "a.m", "p.m",
 }
+#: of those, the ones that often end a sentence too: a break when the next word is capitalised
+#: (not "Jr.", "Inc.": "King Jr. Day", "Apple Inc. Chief Executive …" go on)
+_MAY_END = {"etc", "usw", "itd", "itp", "a.m", "p.m"}
 _SENT_END = re.compile(r"[.!?…]+[\"'»”)\]]*(?=\s+|$)")
 
 
@@ -57,8 +60,10 @@ def split_sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
         for m in _SENT_END.finditer(seg):
             before = seg[pos:m.start()].split()
             last = before[-1].lower().rstrip(".") if before else ""
+            after = seg[m.end():].lstrip()[:1]
             if m.group(0).startswith(".") and len(m.group(0)) == 1 and (
-                last in _ABBREV or (len(last) == 1 and last.isalpha())
+                (last in _ABBREV and not (last in _MAY_END and after.isupper()))
+                or (len(last) == 1 and last.isalpha())
                 or no_break_after(seg, m.start(), lang)
             ):
                 continue
