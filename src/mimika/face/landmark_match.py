@@ -69,8 +69,8 @@ def correction(points: np.ndarray, anchors: np.ndarray, residual: np.ndarray,
 
 
 def match_landmarks(rig: BlendshapeRig, skin: MeshObject, landmarks: np.ndarray, iod: float,
-            shapes: ShapeSet, table: Mapping, codes: Sequence[str], weight: np.ndarray
-            ) -> tuple[ShapeSet, dict]:
+                    shapes: ShapeSet, table: Mapping, codes: Sequence[str], weight: np.ndarray
+                    ) -> tuple[ShapeSet, dict]:
     """``shapes`` and ``table`` with a correction shape per AU of ``codes``: ``rig`` is the
     head's rig built from them, ``skin`` its skin at rest in the frame its shapes move in,
     ``landmarks`` (68,) the landmarks' skin vertices, ``iod`` its inter-ocular distance (cm)

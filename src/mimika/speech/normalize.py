@@ -515,14 +515,12 @@ def _numeric_date_spans(text: str, table: Table) -> Iterator[Span]:
         values = dict(zip(fmt, map(int, m.groups()), strict=True))
         if not (1 <= values["m"] <= 12 and 1 <= values["d"] <= 31):
             continue
-        spoken = _date_words(values, table, table["_code"])
+        ending = ""
         if base == "de":  # the day's ending from the word before it: "am ersten Januar"
             rules = table["ordinals"]
             ending = rules["endings"].get(_previous_word(text, m.start()),
                                           rules["before_month"])
-            day = _de_ordinal_stem(values["d"], table["numbers"]) + ending
-            spoken = " ".join([day, *spoken.split(" ")[1:]])
-        yield Span(m.start(), m.end(), spoken)
+        yield Span(m.start(), m.end(), _date_words(values, table, table["_code"], ending))
 
 
 def _decade_spans(text: str, table: Table) -> Iterator[Span]:
@@ -661,7 +659,9 @@ def _parse_int(text: str) -> int:
     return int(re.sub(r"[\s\u00a0,.'’]", "", written))
 
 
-def _date_words(values: dict[str, int], table: Table, lang: str) -> str:
+def _date_words(values: dict[str, int], table: Table, lang: str, ending: str = "") -> str:
+    """The date ``values`` (d, m, y) in words; ``ending``: the German day's (default the
+    table's ``date_day``: *zehnter März*; after "am": *zehnten*)."""
     day, month, year = values.get("d"), values.get("m"), values.get("y")
     base = _base(lang)
     year_text = year_words(year, lang) if year is not None else None
@@ -675,7 +675,8 @@ def _date_words(values: dict[str, int], table: Table, lang: str) -> str:
         return f"{head}, {year_text}" if head and year_text and day else " ".join(
             w for w in (head, year_text) if w)
     if base == "de":
-        words = [ordinal_words(day, lang, table["ordinals"]["date_day"]) if day else None,
+        words = [ordinal_words(day, lang, ending or table["ordinals"]["date_day"]) if day
+                 else None,
                  table["months"][month - 1] if month else None, year_text]
     else:
         months = table["months_genitive"] if day else table["months"]
