@@ -250,6 +250,27 @@ def test_hair_has_strands_with_soft_transparent_ends(daniel):
     assert lum[a > 0.95].std() > 4  # strand-to-strand variation
 
 
+def test_grey_hairs_show_as_single_hairs_not_lines():
+    """Greying hair: its white strands surface for a few millimetres and dive under the others
+    (long unbroken white lines read as pinstripes), and the hair's mean tone is kept."""
+    from mimika.face.makehuman.paint.hair import _grey_strands
+
+    base = color.hex_linear("#6b6058")  # daniel's light ash brown
+    x, y = np.meshgrid(np.arange(0, 3, 0.005), np.arange(0, 6, 0.005))  # cm across, along
+    c = np.tile(base, (x.size, 1)).astype(np.float32)
+    out = _grey_strands(c, base, x.ravel().astype(np.float32), y.ravel().astype(np.float32),
+                        seed=5, fine_cm=0.05)
+    white = (color.luminance(out) > 1.15 * color.luminance(base)).reshape(x.shape)
+    runs = []  # lengths (cm) of white runs along each strand line
+    for col in white.T:
+        edges = np.flatnonzero(np.diff(np.r_[0, col.astype(np.int8), 0]))
+        runs += list((edges[1::2] - edges[0::2]) * 0.005)
+    runs = np.array(runs)
+    assert len(runs) > 100 and 0.1 < np.median(runs) < 1.5, np.median(runs)
+    assert runs.max() < 3.0  # no line runs on along the strand
+    assert abs(color.luminance(out).mean() / color.luminance(base) - 1) < 0.02
+
+
 @needs_anny
 def test_scalp_under_the_hair_takes_the_hairs_colour(daniel):
     """Skin seen between strand tips reads as hair: the scalp under the hair is painted much

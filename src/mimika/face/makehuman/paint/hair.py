@@ -28,6 +28,8 @@ from mimika.face.makehuman.paint.tables import table
 
 #: islands smaller than this (cm²) are cards: strands straight in texture space
 CARD_CM2 = 250.0
+#: how long a strand shows on the surface before it dives under others (cm, random around it)
+SEGMENT_CM = 0.5
 
 
 def styles() -> dict:
@@ -234,7 +236,9 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
         level = np.log2(np.maximum(scale, 1.0))
         fibre = sum(np.clip(1.0 - np.abs(level - k), 0.0, 1.0) * (octave(
             _fine_cm(st, tsz) / 2 ** k, 13 + 4 * k) - 0.5) for k in range(3)) + 0.5
-        gap = smoothstep(0.3, 0.05, fibre)
+        # the gaps between strands close and open along them (strands cross and weave)
+        gap = smoothstep(0.3, 0.05, fibre) * smoothstep(0.3, 0.6, value3(p, 0.4, seed + 18,
+                                                                         order=1))
         tone = (1.0 + 0.12 * (clump - 0.5) + 0.15 * (strand - 0.5) + 0.3 * (fibre - 0.5)) * \
             (1.0 - 0.3 * gap) * (1.0 + 0.06 * fbm3(p, 1.2, seed + 9, octaves=2))
         # strand ends: tapered locks a few texels wide, each ending at its own length,
@@ -256,8 +260,9 @@ def paint_hair(piece: Piece, character: Character) -> np.ndarray:
     lift = at.at(np.linalg.norm(piece.meta.get("offsets", np.zeros_like(pos)), axis=1) * CM)
     root = 1.0 - smoothstep(0.15, 1.2, lift)
     tone = tone * (1.0 - st["root_dark"] * root) * (1.0 + 0.12 * (1.0 - edge))
+    _, along = _pole_coords(p, *poles[0][:2])
     c = _grey_strands(base[None, :] * tone[:, None], base, qn * np.maximum(scale, 1.0) ** 0.5,
-                      seed, _fine_cm(st, tsz))
+                      along.astype(np.float32), seed, _fine_cm(st, tsz))
     return at.image(color.rgba8(c, alpha))
 
 
@@ -293,10 +298,11 @@ def _coils(p: np.ndarray, st: dict, seed: int, dist: np.ndarray, fade: np.ndarra
     return tone, alpha
 
 
-def _grey_strands(c: np.ndarray, base: np.ndarray, across: np.ndarray, seed: int,
-                  fine_cm: float) -> np.ndarray:
-    """Greying hair: a share of thin white strands among darker ones, one in three of the
-    finest strands (mean tone kept)."""
+def _grey_strands(c: np.ndarray, base: np.ndarray, across: np.ndarray, along: np.ndarray,
+                  seed: int, fine_cm: float) -> np.ndarray:
+    """Greying hair: a share of thin white strands among darker ones (mean tone kept); each
+    shows on the surface over lengths of a few millimetres (``along``: cm along the strands)
+    and dives under its neighbours between them, so they read as single hairs, not lines."""
     s = color.to_srgb8(base).astype(np.float32) / 255.0
     sat = (s.max() - s.min()) / max(float(s.max()), 1e-6)
     grey = float(smoothstep(0.3, 0.15, np.float32(sat)) * smoothstep(0.2, 0.35,
@@ -305,10 +311,13 @@ def _grey_strands(c: np.ndarray, base: np.ndarray, across: np.ndarray, seed: int
         return c
     share = 0.3  # white strands
     r, f = _Table(4096, seed + 16).strands(across / np.float32(fine_cm))
-    white = (r < share) * smoothstep(0.35, 0.15, np.abs(f - 0.5))
+    shows = smoothstep(0.45, 0.6, _Table(4096, seed + 17)(along / np.float32(SEGMENT_CM)
+                                                           + 997.0 * r))
+    white = (r < share) * smoothstep(0.35, 0.15, np.abs(f - 0.5)) * shows
     lum = float(color.luminance(base))
     light = np.full(3, min(1.25 * lum, 0.5), np.float32)
-    dark = np.maximum(base - 0.5 * share * light, 0.2 * base) / (1 - 0.5 * share)
+    k = float(white.mean())
+    dark = np.maximum(base - k * light, 0.2 * base) / (1 - k)
     mixed = dark[None, :] * (1 - white[:, None]) + light[None, :] * white[:, None]
     mixed *= (c / np.maximum(base, 1e-6)).mean(1, keepdims=True)
     return c * (1 - grey) + mixed * grey
