@@ -272,6 +272,27 @@ def test_grey_hairs_show_as_single_hairs_not_lines():
 
 
 @needs_anny
+def test_stubble_fades_out_on_the_cheeks_without_an_edge(daniel):
+    """The beard shadow's upper line runs steeply down the cheek in front of the ear; its fade
+    is measured across that line, so the stubble ends over a centimetre, not in a visible
+    vertical edge from the cheekbone to the jaw."""
+    from mimika.face.makehuman.paint.skin import _Face, landmarks
+
+    skin = daniel[1]["skin"]
+    pos = skin.vertices.astype(np.float64) * 10.0
+    face = _Face(landmarks(skin))
+    t = skin.parts["skin"]
+    e = np.unique(np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), 1), axis=0)
+    k = np.linspace(0.0, 1.0, 21)[:, None, None]  # points along every edge, as painted
+    b = face.beard((pos[e[:, 0]] + k * (pos[e[:, 1]] - pos[e[:, 0]])).reshape(-1, 3))
+    b = b.reshape(len(k), len(e))
+    steep = np.abs(np.diff(b, axis=0)).max(0) * 20 / np.linalg.norm(
+        pos[e[:, 1]] - pos[e[:, 0]], axis=1)
+    assert (b > 0.9).any() and (b < 0.1).any()  # a beard, and bare cheeks
+    assert steep.max() < 2.0, f"stubble changes by {steep.max():.1f} per cm"
+
+
+@needs_anny
 def test_scalp_under_the_hair_takes_the_hairs_colour(daniel):
     """Skin seen between strand tips reads as hair: the scalp under the hair is painted much
     darker than the forehead, toward the hair's colour."""

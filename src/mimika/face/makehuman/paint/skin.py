@@ -169,7 +169,14 @@ class _Face:
         ys = [lm[33, 1] - 0.15, lm[31, 1] - 0.35, lm[31, 1] - 1.0, lm[2, 1] + 0.2,
               lm[0, 1] + 0.8, lm[0, 1] + 0.8]
         top = np.interp(ax, xs, ys)
-        below = smoothstep(0.35, -0.35, p[:, 1] - top)
+        # faded by the distance to that line, not the height above it: where it runs steeply
+        # down the cheek a vertical fade ended the stubble in a sharp edge
+        q = np.column_stack([ax, p[:, 1]])[:, None, :]
+        a = np.column_stack([xs, ys])[:-1]
+        ab = np.diff(np.column_stack([xs, ys]), axis=0)
+        t = np.clip(((q - a) * ab).sum(-1) / (ab * ab).sum(-1), 0.0, 1.0)
+        d = np.linalg.norm(q - (a + t[..., None] * ab), axis=-1).min(1)
+        below = smoothstep(0.6, -0.6, np.where(p[:, 1] > top, d, -d))
         neck = smoothstep(self.chin[1] - 4.8, self.chin[1] - 2.6, p[:, 1])
         side = smoothstep(self.ear_z - 1.2, self.ear_z + 0.6, p[:, 2])
         return below * neck * side
