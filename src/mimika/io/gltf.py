@@ -416,6 +416,13 @@ def _tangents(v: np.ndarray, n: np.ndarray, uv: np.ndarray, faces: np.ndarray) -
     return np.c_[tu, w].astype(np.float32)
 
 
+def inverse_binds(b: _Builder, joints: np.ndarray) -> int:
+    """The accessor of the inverse bind matrices of unrotated joints at ``joints`` (J, 3) cm."""
+    ibm = np.tile(np.eye(4, dtype=np.float32), (len(joints), 1, 1))
+    ibm[:, 3, :3] = -np.asarray(joints, np.float32) * SCALE  # column-major: translation last
+    return b.add(ibm.reshape(len(joints), 16), "MAT4", _FLOAT)
+
+
 def _object_attributes(b: _Builder, o: Any, uvs: bool, extra: Attributes | None = None
                        ) -> tuple[bool, np.ndarray, dict]:
     """(is an eye, its origin, attributes) of a head object: positions (eyes about their
@@ -485,13 +492,8 @@ def build_gltf(rig: Rig, track: AUTrack | None = None, *, name: str | None = Non
     head_t0 = (pivot - neck_base) * SCALE
     nodes[1]["translation"] = [float(x) for x in head_t0]
     nodes[1]["children"] = []
-    ibm = np.zeros((2, 4, 4), np.float32)
-    for j, p in enumerate((neck_base, pivot)):
-        m = np.eye(4, dtype=np.float32)
-        m[:3, 3] = -p * SCALE
-        ibm[j] = m.T  # column-major
     skin = {"name": "neck-head", "joints": [0, 1], "skeleton": 0,
-            "inverseBindMatrices": b.add(ibm.reshape(2, 16), "MAT4", _FLOAT)}
+            "inverseBindMatrices": inverse_binds(b, np.stack([neck_base, pivot]))}
     meshes: list[dict] = []
     roots = [0]
     morph_nodes: list[tuple[int, list[str]]] = []

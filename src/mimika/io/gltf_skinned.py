@@ -40,6 +40,7 @@ from mimika.io.gltf import (
     _object_attributes,
     _object_mesh,
     _quat,
+    inverse_binds,
     timing_extras,
     with_textures,
 )
@@ -104,13 +105,8 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
         kids = [j for j in range(nb) if sk.parents[j] == i]
         if kids:
             nodes[i]["children"] = kids
-    ibm = np.zeros((nb, 4, 4), np.float32)
-    for i in range(nb):
-        m = np.eye(4, dtype=np.float32)
-        m[:3, 3] = -heads[i] * SCALE
-        ibm[i] = m.T  # column-major
     skin = {"name": "skeleton", "joints": list(range(nb)), "skeleton": 0,
-            "inverseBindMatrices": b.add(ibm.reshape(nb, 16), "MAT4", _FLOAT)}
+            "inverseBindMatrices": inverse_binds(b, heads[:nb])}
 
     codes, morphs = _targets(rig)
     head_j = sk.names.index("head")
