@@ -23,7 +23,7 @@ def test_basic_emotions_are_emfacs_prototypes():
     assert aus == {"happiness": ["AU06", "AU12", "AU25"],
                    "sadness": ["AU01", "AU04", "AU15", "AU17", "AU41"],
                    "surprise": ["AU01", "AU02", "AU05", "AU26"],
-                   "fear": ["AU01", "AU02", "AU04", "AU05", "AU20", "AU26"],
+                   "fear": ["AU01", "AU02", "AU04", "AU05", "AU20", "AU25"],
                    "anger": ["AU04", "AU05", "AU07", "AU10", "AU23", "AU25"],
                    "disgust": ["AU09", "AU17"],
                    "contempt": ["AU12R", "AU14R"]}
