@@ -128,3 +128,39 @@ def test_the_default_character_speaks_with_parted_lips_and_closes_them_at_p_b_m(
     assert max(lip_opening(rig, tr.frame(round(t * 25))) for t in apex) == 0.0
     words = [k for k in range(tr.n_frames) if any(w.start <= k / 25 <= w.end for w in u.words)]
     assert np.median([lip_opening(rig, tr.frame(k)) for k in words[::2]]) > 0.09
+
+
+def test_lengthened_incisors_keep_square_biting_corners():
+    """The crowns are stretched to a real length, but each incisor's biting end keeps
+    MakeHuman's shape: stretched with the rest, the corners it cuts off grew into V-shaped
+    gaps between the teeth that read as saw teeth when only the edges show (a smile at C)."""
+    from mimika.face.makehuman.build import Outfit, build
+    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.paint.regions import uv_islands
+    from mimika.face.makehuman.teeth import _front, _on_gum, rows, seat_teeth
+
+    c = load_character_spec("amara")
+    built = build(c.phenotype_values(), Outfit(c.hair, c.eyebrows, c.eyelashes, c.clothes))
+
+    def corners(b) -> np.ndarray:
+        """Per upper central incisor: how far above its edge it reaches its full width,
+        over its half-width."""
+        t = next(p for p in b.pieces if p.name == "teeth")
+        v = t.vertices.astype(float)
+        tris = np.concatenate(list(t.parts.values()))
+        tooth = uv_islands(t.weld[tris], int(t.weld.max()) + 1)[t.weld]
+        upper = ~rows(b) & ~_on_gum(t)
+        out = []
+        for i in np.unique(tooth[_front(b, v, upper)]):
+            p = v[(tooth == i) & upper]
+            half = 0.5 * np.ptp(p[:, 0])
+            wide = np.abs(p[:, 0] - 0.5 * (p[:, 0].min() + p[:, 0].max())) >= 0.85 * half
+            out.append((p[wide, 1].min() - p[:, 1].min()) / half)
+        return np.array(out)
+
+    before, after = corners(built), corners(seat_teeth(built))
+    assert len(after) >= 2
+    t0 = next(p for p in built.pieces if p.name == "teeth")
+    t1 = next(p for p in seat_teeth(built).pieces if p.name == "teeth")
+    assert np.ptp(t1.vertices[:, 1]) > np.ptp(t0.vertices[:, 1])  # the crowns did grow
+    np.testing.assert_allclose(after, before, rtol=0.1)

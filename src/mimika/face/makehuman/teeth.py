@@ -27,6 +27,8 @@ from mimika.face.makehuman.build import SCALE, Built, Piece
 from mimika.face.makehuman.paint.regions import uv_islands
 
 _MM = 0.1 / SCALE  # base units per mm
+#: the share of a tooth's crown at its biting end that keeps its shape when the crown grows
+TIP_SHARE = 0.35
 
 
 @functools.cache
@@ -86,10 +88,15 @@ def _edge(built: Built, v: np.ndarray, row: np.ndarray, upper: bool) -> float:
     return float(v[front, 1].min() if upper else v[front, 1].max())
 
 
-def _lengthen_crowns(built: Built, v: np.ndarray, lower: np.ndarray, gum: np.ndarray
-                     ) -> np.ndarray:
+def _lengthen_crowns(built: Built, v: np.ndarray, lower: np.ndarray, gum: np.ndarray,
+                     tooth: np.ndarray) -> np.ndarray:
     """Teeth vertices ``v`` with every crown stretched from its row's gum margin toward the
-    bite, so a central incisor shows its real crown length below the gum."""
+    bite, so a central incisor shows its real crown length below the gum. Each tooth
+    (``tooth``: its id per vertex) keeps the shape of its biting end — the last
+    :data:`TIP_SHARE` of its crown moves down whole and only the part above it stretches —
+    so the corners MakeHuman's low-poly incisors cut off stay as small as they are: stretched
+    with the crown they opened into V-shaped gaps that read as saw teeth when only the edges
+    show between parted lips."""
     st = settings()
     v = v.astype(np.float64).copy()
     for row, upper, key in ((~lower, True, "upper_crown_mm"), (lower, False, "lower_crown_mm")):
@@ -100,9 +107,25 @@ def _lengthen_crowns(built: Built, v: np.ndarray, lower: np.ndarray, gum: np.nda
         shown = sign * (edge - margin)
         if not shown > 0:  # no gum over the front teeth (or none found)
             continue
+        k = max(st[key] * _MM / shown, 1.0)
         crown = row & ~gum & (sign * (v[:, 1] - margin) > 0)
-        v[crown, 1] = margin + (v[crown, 1] - margin) * max(st[key] * _MM / shown, 1.0)
+        for t in np.unique(tooth[crown]):
+            sel = crown & (tooth == t)
+            d = sign * (v[sel, 1] - margin)  # below the margin, toward the bite
+            end = d.max()
+            tip = TIP_SHARE * end
+            grown = np.where(d >= end - tip, d + (k - 1.0) * end,
+                             d * (k * end - tip) / max(end - tip, 1e-9))
+            v[sel, 1] = margin + sign * grown
     return v
+
+
+def _teeth_ids(teeth: Piece) -> np.ndarray:
+    """Per teeth vertex: the id of the piece of geometry it belongs to (each tooth is one),
+    vertices split at UV seams counted as one."""
+    tris = np.concatenate(list(teeth.parts.values()))
+    weld = teeth.weld if teeth.weld is not None else np.arange(len(teeth.vertices))
+    return uv_islands(weld[tris], int(weld.max()) + 1)[weld]
 
 
 def seat_teeth(built: Built) -> Built:
@@ -113,7 +136,7 @@ def seat_teeth(built: Built) -> Built:
         return built
     st = settings()
     lower, gum = rows(built), _on_gum(teeth)
-    v = _lengthen_crowns(built, teeth.vertices, lower, gum)
+    v = _lengthen_crowns(built, teeth.vertices, lower, gum, _teeth_ids(teeth))
     _, _, l62, l66 = _lip_landmarks()
     d_up = built.base_vertices[l62, 1] - st["upper_below_lip_mm"] * _MM - _edge(
         built, v, ~lower & ~gum, True)
