@@ -106,7 +106,7 @@ def build_skinned_gltf(rig: Any, track: AUTrack | None = None, *, name: str | No
         if kids:
             nodes[i]["children"] = kids
     skin = {"name": "skeleton", "joints": list(range(nb)), "skeleton": 0,
-            "inverseBindMatrices": inverse_binds(b, heads[:nb])}
+            "inverseBindMatrices": inverse_binds(b, heads)}
 
     codes, morphs = _targets(rig)
     head_j = sk.names.index("head")
