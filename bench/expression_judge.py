@@ -75,12 +75,13 @@ JITTER = 1
 def judge(files: list[Path], which: str = "face-api") -> list[dict]:
     """A recogniser's verdict on each PNG (see ``bench/judge/*.cjs``); with :data:`JITTER`
     above 1 its expression probabilities are the mean over the render and its jittered
-    copies (the landmarks stay the render's own)."""
+    copies, and its landmarks the median of theirs mapped back onto the render."""
     if not (JUDGE / "node_modules").is_dir():
         sys.exit("expression_judge: the judge is not installed; run: bash scripts/setup-judge.sh")
-    seen = [[f, *jittered(f, JITTER)] for f in files]
+    ident = np.eye(3)[:2]
+    seen = [[(f, ident), *jittered(f, JITTER)] for f in files]
     out = subprocess.run(["node", str(JUDGE / JUDGES[which]),
-                          *(str(f) for fs in seen for f in fs)],
+                          *(str(f) for fs in seen for f, _ in fs)],
                          capture_output=True, text=True, check=True).stdout
     by_file = {}
     for line in out.splitlines():
@@ -89,25 +90,35 @@ def judge(files: list[Path], which: str = "face-api") -> list[dict]:
             by_file[v["file"]] = v
     verdicts = []
     for fs in seen:
-        v = dict(by_file.get(str(fs[0]), {}))
-        got = [by_file.get(str(f), {}).get("expressions") for f in fs]
-        got = [g for g in got if g]
-        if got:  # copies where no face was found do not vote
-            v["expressions"] = {c: float(np.mean([g[c] for g in got])) for c in got[0]}
+        v = dict(by_file.get(str(fs[0][0]), {}))
+        got = [(by_file.get(str(f), {}), a) for f, a in fs]
+        ex = [g["expressions"] for g, _ in got if g.get("expressions")]
+        if ex:  # copies where no face was found do not vote
+            v["expressions"] = {c: float(np.mean([e[c] for e in ex])) for c in ex[0]}
+        lms = [_unmap(np.asarray(g["landmarks"]), a) for g, a in got if g.get("landmarks")]
+        if lms:
+            v["landmarks"] = np.median(lms, axis=0).tolist()
         verdicts.append(v)
     return verdicts
 
 
-def jittered(path: Path, n: int) -> list[Path]:
+def _unmap(points: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Pixel ``points`` of a copy made by the affine ``a`` (render → copy), on the render."""
+    return (points - a[:, 2]) @ np.linalg.inv(a[:, :2]).T
+
+
+def jittered(path: Path, n: int) -> list[tuple[Path, np.ndarray]]:
     """``n − 1`` copies of the image at ``path`` as a camera a little off would take it:
     shifted by up to 2.5 % of its width, scaled by 0.94–1.06 and turned by up to 4°
-    (deterministic). A verdict that flips between them reads a pixel, not a face."""
+    (deterministic), each with the 2 × 3 affine map of its pixels from the render's.
+    A verdict that flips between them reads a pixel, not a face."""
     from PIL import Image
 
     if n <= 1:
         return []
     img = Image.open(path).convert("RGB")
     w, h = img.size
+    c = np.array([w, h]) / 2
     rng = np.random.default_rng(17)
     out = []
     for k in range(1, n):
@@ -118,10 +129,17 @@ def jittered(path: Path, n: int) -> list[Path]:
         sw, sh = round(w * s), round(h * s)
         im = im.resize((sw, sh), Image.BICUBIC)
         canvas = Image.new("RGB", (w, h), fill)
-        canvas.paste(im, ((w - sw) // 2, (h - sh) // 2))
+        off = np.array([(w - sw) // 2, (h - sh) // 2])
+        canvas.paste(im, tuple(int(o) for o in off))
         f = path.with_name(f"{path.stem}.jitter{k}.png")
         canvas.save(f)
-        out.append(f)
+        # PIL turns counter-clockwise as seen (y down), about the centre, then shifts
+        t = np.radians(turn)
+        rot = np.array([[np.cos(t), np.sin(t)], [-np.sin(t), np.cos(t)]])
+        scale = np.diag([sw / w, sh / h])
+        lin = scale @ rot
+        shift = scale @ (c + np.array([dx, dy]) - rot @ c) + off
+        out.append((f, np.column_stack([lin, shift])))
     return out
 
 

@@ -28,12 +28,15 @@ def background_mask(img):
     return np.abs(img.astype(int) - row_bg).sum(2) > 30
 
 
-def test_image_has_size_and_the_head_fills_the_centre(renderer):
+def test_image_has_size_and_the_head_fills_the_centre(renderer, builtin_rig):
     img = renderer.render()
     assert img.shape == (240, 320, 3) and img.dtype == np.uint8
     head = background_mask(img)
     assert 0.25 < head.mean() < 0.8
-    assert head[100:140, 142:178].all()  # the face is in the middle (between the eye corners)
+    lm = renderer.camera("front").project(builtin_rig.head.landmark_points(), SIZE)
+    (x0, y0), (x1, _), (_, y1) = lm[39], lm[42], lm[33]  # inner eye corners, nose tip
+    assert 140 < x0 < x1 < 180 and 80 < y0 < y1 < 160  # the face is in the middle
+    assert head[round(y0) + 2:round(y1), round(x0) + 2:round(x1) - 1].all()
     xs = np.nonzero(head)[1]
     assert abs(xs.mean() - 160) < 20  # centred left–right
 

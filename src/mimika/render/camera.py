@@ -25,6 +25,11 @@ VIEW_ANGLES: Mapping[str, float] = {"front": 0.0, "three-quarter": 35.0, "profil
 #: Default vertical field of view, degrees.
 FOV_Y = 20.0
 
+#: Share of the image height the face (hairline to chin) fills by default: a portrait with
+#: room for the hair and for a dropped jaw — at 0.75 an open mouth (AU26/27) took the chin to
+#: the frame's edge, where face detectors (and viewers) lose it.
+FILL = 0.6
+
 
 def check_view(view: str) -> str:
     """Return ``view`` if it names a view, else raise :class:`ParameterError`."""
@@ -125,7 +130,7 @@ def frame_head(
     view: str = "front",
     aspect: float = 4.0 / 3.0,
     fov_y: float = FOV_Y,
-    fill: float = 0.75,
+    fill: float = FILL,
     eye_line: float | None = None,
     head_share: float | None = None,
 ) -> Camera:

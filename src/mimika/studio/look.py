@@ -11,8 +11,10 @@ from __future__ import annotations
 from dataclasses import asdict
 from typing import Any
 
+from mimika.render.camera import FILL as PLAIN_FILL
+
 #: how much of the image height the face fills, per look (render.camera / the newsreader)
-FILL = {"plain": 0.75, "news": 0.62}
+FILL = {"plain": PLAIN_FILL, "news": 0.62}
 
 
 def lighting(look: str) -> Any:
