@@ -27,7 +27,8 @@ and view and counted as recognised when the recogniser's top class is ``--as``'s
 ``--seeds N`` also judges each character preset under N − 1 other names — the same shapes and
 assets with other noise in the paint — and prints the range: on mei, FER2013's three-quarter
 count went from 1 to 5 of 7 between paint seeds, face-api's by one. ``--jitter N`` averages
-each verdict over the render and N − 1 copies shifted, scaled and turned a little: daniel's
+each verdict over the render and N − 1 copies shifted, scaled and turned a little (and takes
+the median of their landmarks, mapped back onto the render): daniel's
 front smile read sad 0.89 / happy 0.11 as rendered, and greying out almost any 64-pixel patch
 of his face flipped it to happy 0.9 or to 0.01 — one render's verdict can sit on a knife edge.
 
@@ -313,7 +314,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="the expression --try's variants are meant to show")
     p.add_argument("--jitter", type=int, default=1,
                    help="average each verdict over the render and N − 1 copies shifted, "
-                        "scaled and turned a little (a face that reads, not a pixel)")
+                        "scaled and turned a little, landmarks by their median (a face that "
+                        "reads, not a pixel)")
     p.add_argument("--seeds", type=int, default=1,
                    help="judge each character preset under this many paint seeds and print "
                         "the range (the recognisers flip on texture noise)")

@@ -5,8 +5,8 @@ docs/img/au-sheet-*.png).
 
 Per head, the library's seven expressions (neutral and the six basic emotions) at intensity
 0.6 and 1.0, front and three-quarter, with their appearance changes, in the ``studio`` light
-(``mimika pose --expression E --intensity K``); and every modelled AU at full intensity
-(``mimika pose --grid``).
+(``mimika pose --expression E --intensity K``); and every modelled AU at full intensity, framed
+closer for the wrinkles (``mimika pose --grid --face-height 0.75``).
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
     a = p.parse_args(argv)
     for name in a.heads.split(","):
         save_png(expression_sheet(name), a.out / f"expressions-{name}.png")
-        save_png(au_sheet(head=load_head(name)[1]), a.out / f"au-sheet-{name}.png")
+        save_png(au_sheet(head=load_head(name)[1], fill=0.75), a.out / f"au-sheet-{name}.png")
         print(f"wrote {a.out}/expressions-{name}.png and au-sheet-{name}.png", flush=True)
     return 0
 

@@ -7,7 +7,9 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
+from PIL import Image
 
 pytest.importorskip("yaml")
 pytest.importorskip("distributed")
@@ -137,6 +139,7 @@ BAD = [
     ("views: [front]\n", "the spec renders nothing"),
     ("aus: [AU12]\nanimation: {format: avi}\n", "animation.format: unknown clip format 'avi'"),
     ("aus: [AU12]\ndisabled_rules: ['7<8']\n", "disabled_rules[0]: no co-occurrence rule"),
+    ("aus: [AU12]\nface_height: 2\n", "spec.yaml:2: face_height: 2 must be ≤ 1"),
 ]
 
 
@@ -365,3 +368,17 @@ def test_doc_specs_parse():
     assert len(blocks) >= 3
     for b in blocks:
         assert parse_spec(yaml.safe_load(b)).hash
+
+
+@pytest.mark.render
+def test_face_height_frames_the_face_closer(tmp_path, client):
+    def head_width(text: str, name: str) -> int:
+        out = tmp_path / name
+        run_batch(load_spec(_spec(tmp_path, text)), out, client=client)
+        img = np.asarray(Image.open(next((out / "images").glob("*.png"))), np.int16)
+        skin = img[..., 0] - img[..., 2] > 40  # not the blue-grey backdrop
+        return int(skin.any(0).sum())
+
+    base = "aus: [AU12]\nsize: 128x96\nsamples: 0\n"
+    portrait, close = head_width(base, "portrait"), head_width(base + "face_height: 0.9\n", "c")
+    assert close == pytest.approx(1.5 * portrait, rel=0.15)  # 0.9 / 0.6 of the default's

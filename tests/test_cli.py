@@ -89,3 +89,9 @@ def test_pose_expression_and_grid(capsys, tmp_path):
     assert run(capsys, "pose", "--grid", "--columns", "6", "-q", "-o", str(sheet))[0] == 0
     w, h = Image.open(sheet).size
     assert w >= 6 * 200 and h > w / 2  # ≥ 36 tiles in 6 columns
+
+
+def test_pose_face_height_out_of_range_is_one_line_with_exit_2(capsys, tmp_path):
+    code, _, err = run(capsys, "pose", "--face-height", "1.5", "-o", str(tmp_path / "x.png"))
+    assert code == 2 and "--face-height 1.5" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x.png").exists()

@@ -142,3 +142,17 @@ def test_fine_hairs_on_the_skin_let_it_show_through(material):
             shade[cover] = r.render().astype(float)[32, 32].mean()
     assert shade[255] < 0.2 * shade[0]  # fully covered: the hairs' dark colour
     assert 0.3 < shade[153] / shade[0] < 0.6  # 60 % covered: 40 % skin
+
+
+def test_the_portrait_keeps_a_dropped_jaw_in_the_picture_and_a_close_up_is_larger(builtin_rig):
+    head = builtin_rig.head
+    lm = head.landmark_points(builtin_rig.deform({"AU26": 1.0, "AU27": 1.0}))
+    with Renderer(head, size=SIZE) as r, Renderer(head, size=SIZE, fill=0.75) as close:
+        chin = r.camera("front").project(lm[[8]], SIZE)[0]
+        eyes = [c.camera("front").project(head.landmark_points()[[36, 45]], SIZE)
+                for c in (r, close)]
+    assert chin[1] < 0.95 * SIZE[1]  # the chin of the widest-open mouth stays inside
+    iod = [float(np.linalg.norm(e[1] - e[0])) for e in eyes]
+    assert iod[1] / iod[0] == pytest.approx(0.75 / 0.6, rel=0.05)
+    with pytest.raises(ParameterError, match="fill"):
+        Renderer(head, size=SIZE, fill=1.5)

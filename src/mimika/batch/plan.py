@@ -81,6 +81,7 @@ class Plan:
         """Render settings shared by every item (sent once per task)."""
         s = self.spec
         return {"size": list(s.size), "samples": s.samples, "light": s.light,
+                "face_height": s.face_height,
                 "blend": s.blend,
                 "disabled_rules": list(s.disabled_rules), "clip_format": self.clip_format,
                 "animation": None if s.animation is None else {

@@ -22,6 +22,7 @@ from typing import Any
 from mimika.errors import DataError, MimikaError, ParameterError
 from mimika.face.heads import DEFAULT_HEAD
 from mimika.facs.catalogue import SEED_AUS, parse_au, parse_intensity
+from mimika.render.camera import FILL
 
 log = logging.getLogger(__name__)
 
@@ -34,8 +35,8 @@ CLIP_FORMATS = ("auto", "mp4", "gif", "strip")
 AU_KEYWORDS = ("seed", "modelled")
 
 TOP_KEYS = ("name", "aus", "expressions", "intensities", "neutral", "sample", "heads",
-            "identities", "views", "size", "samples", "light", "blend", "disabled_rules",
-            "seed", "animation")
+            "identities", "views", "size", "samples", "light", "face_height", "blend",
+            "disabled_rules", "seed", "animation")
 SAMPLE_KEYS = ("count", "pool", "min_aus", "max_aus", "range", "levels")
 ANIMATION_KEYS = ("onset", "apex", "offset", "fps", "format", "ease", "speech", "audio", "lang")
 
@@ -102,6 +103,7 @@ class BatchSpec:
     size: tuple[int, int] = (320, 240)
     samples: int = 4
     light: str = "studio"  #: a ``--light`` spec (mimika.render.lighting)
+    face_height: float = FILL  #: share of the image height the face fills (render.camera)
     blend: bool = True
     disabled_rules: tuple[str, ...] = ()
     seed: int = 0
@@ -546,6 +548,8 @@ def parse_spec(data: Any, *, source: str = "<spec>", base: str | os.PathLike | N
         except ParameterError as e:
             raise c.error(("light",), str(e).replace("--light ", "")) from None
         kw["light"] = d["light"]
+    if "face_height" in d:
+        kw["face_height"] = c.number(d["face_height"], ("face_height",), lo=0.05, hi=1.0)
     if "blend" in d:
         kw["blend"] = c.flag(d["blend"], ("blend",))
     if d.get("disabled_rules") is not None:

@@ -1,9 +1,9 @@
 """The worker side of a batch: render items to encoded PNG (and clip) bytes.
 
 Runs inside Dask worker processes (or in-process). Each process keeps its heads, rigs and
-renderers in a small module-level cache keyed by (head, identity, size, samples), so a head is
-loaded and its GL objects created once per worker, not once per task. Nothing here imports
-Dask.
+renderers in a small module-level cache keyed by (head, identity, size, samples, light,
+framing), so a head is loaded and its GL objects created once per worker, not once per task.
+Nothing here imports Dask.
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from mimika.render.camera import FILL
+
 log = logging.getLogger(__name__)
 
 _CACHE: OrderedDict[tuple, tuple[Any, Any]] = OrderedDict()
@@ -29,10 +31,10 @@ _CACHE_SIZE = 4
 
 
 def _rig_and_renderer(head: str, identity: Any, size: Sequence[int], samples: int,
-                      light: str = "studio"):
+                      light: str = "studio", fill: float = FILL):
     """(rig, renderer) for one head/identity/size, loaded once per process (LRU of 4)."""
     ident = tuple(identity) if isinstance(identity, list | tuple) else identity
-    key = (head, ident, tuple(size), int(samples), light)
+    key = (head, ident, tuple(size), int(samples), light, fill)
     hit = _CACHE.get(key)
     if hit is not None:
         _CACHE.move_to_end(key)
@@ -44,7 +46,7 @@ def _rig_and_renderer(head: str, identity: Any, size: Sequence[int], samples: in
     t0 = time.perf_counter()
     _, rig = load_head(head, **kw)
     renderer = Renderer(rig.head, size=(int(size[0]), int(size[1])), samples=int(samples),
-                        lighting=light)
+                        lighting=light, fill=fill)
     _CACHE[key] = (rig, renderer)
     log.info("worker %d: loaded head %s (identity %s) in %.2f s", os.getpid(), head, ident,
              time.perf_counter() - t0)
@@ -158,7 +160,8 @@ def render_items(items: Sequence[Mapping[str, Any]], settings: Mapping[str, Any]
         try:
             rig, renderer = _rig_and_renderer(item["head"], item["identity"],
                                               settings["size"], settings["samples"],
-                                              settings.get("light", "studio"))
+                                              settings.get("light", "studio"),
+                                              settings.get("face_height", FILL))
             pose_key = (id(rig), tuple(sorted(item["aus"].items())))
             if last is None or last[0] != pose_key:
                 last = (pose_key, rig.deform(rig.check(item["aus"])))

@@ -27,6 +27,10 @@ def cmd_pose(args: argparse.Namespace) -> int:
 
         aus = expression_aus(args.expression, args.intensity)
     light = parse_light(args.light)
+    if args.face_height is not None and not 0.05 <= args.face_height <= 1.0:
+        raise ParameterError(f"--face-height {args.face_height:g} must be in [0.05, 1]: the "
+                             "share of the image height the face fills (0.6 a portrait, 0.75 "
+                             "a close-up)")
     if args.intensity != 1.0 and not args.expression:
         raise ParameterError("--intensity scales an --expression; give one with it")
     for code, value in parse_au_values(args.au or []).items():
@@ -45,10 +49,11 @@ def cmd_pose(args: argparse.Namespace) -> int:
     _, rig = load_head(args.head, fields=args.fields, identity=identity)
     if args.grid:
         img = au_sheet(head=rig, view=args.view, columns=args.columns, lighting=light,
+                       fill=args.face_height,
                        progress=progress_bar(args.quiet, "rendering AUs"))
     else:
         img = render_pose(aus, head=rig, view=args.view, size=args.size, samples=args.samples,
-                          lighting=light)
+                          lighting=light, fill=args.face_height)
     save_png(img, args.output)
     if not args.quiet:
         print(f"wrote {args.output} ({img.shape[1]}x{img.shape[0]})")
@@ -74,6 +79,9 @@ def register(sub) -> None:
     q.add_argument("--samples", type=int, default=4, choices=(0, 2, 4, 8),
                    help="multisample anti-aliasing samples")
     add_light_arg(q, "studio")
+    q.add_argument("--face-height", type=float, default=None, metavar="F",
+                   help="share of the image height the face (hairline to chin) fills, "
+                        "0.05–1 (default 0.6, a portrait; 0.75 a close-up)")
     q.add_argument("--grid", action="store_true",
                    help="a labelled contact sheet: one tile per modelled AU at full intensity")
     q.add_argument("--columns", type=int, default=8, help="tiles per row for --grid")

@@ -24,7 +24,7 @@ import scipy.sparse as sp
 
 from mimika.errors import ParameterError, RenderError
 from mimika.face.head import Head, MeshObject, Part
-from mimika.render.camera import Camera, check_view, frame_head
+from mimika.render.camera import FILL, Camera, check_view, frame_head
 from mimika.render.context import get_context, has_uniform, render_lock
 from mimika.render.lighting import Lighting, parse_light, set_lights, unit
 from mimika.render.mouth import MouthCavity
@@ -453,6 +453,9 @@ class Renderer:
         For a fixed shot (a video with one camera): triangles whose rest-pose corners all lie
         more than a quarter of the image outside the first frame's view are never drawn — a
         seated newsreader's legs and lower body.
+    fill
+        Share of the image height the face (hairline to chin) fills in the named views
+        (:func:`~mimika.render.camera.frame_head`; default a portrait, 0.6).
 
     The GL context is created on the first :meth:`render`; ``close()`` (or leaving a
     ``with`` block) frees this renderer's GPU objects.
@@ -460,7 +463,7 @@ class Renderer:
 
     def __init__(self, head: Head, size: tuple[int, int] = (640, 480), samples: int = 4,
                  skin_shader: Any = False, lighting: Any = None,
-                 hidden: Any = (), crop: bool = False) -> None:
+                 hidden: Any = (), crop: bool = False, fill: float = FILL) -> None:
         try:
             w, h = (int(s) for s in size)
         except (TypeError, ValueError):
@@ -469,6 +472,10 @@ class Renderer:
             raise ParameterError(f"size={size!r}: width and height must be in 1..8192 pixels")
         if int(samples) < 0:
             raise ParameterError(f"samples={samples!r} must be 0 (no anti-aliasing) or more")
+        if not 0.05 <= fill <= 1.0:
+            raise ParameterError(f"fill={fill} must be in [0.05, 1]: the share of the image "
+                                 "height the face fills")
+        self.fill = float(fill)
         self.head = head
         self.size = (w, h)
         self.samples = int(samples)
@@ -502,7 +509,8 @@ class Renderer:
         """The camera of ``view`` (framed on the rest-pose face, cached)."""
         check_view(view)
         if view not in self._cameras:
-            self._cameras[view] = frame_head(self.head, view, aspect=self.aspect)
+            self._cameras[view] = frame_head(self.head, view, aspect=self.aspect,
+                                             fill=self.fill)
         return self._cameras[view]
 
     def render(
