@@ -115,6 +115,7 @@ def build_builtin_head(resolution: int = 1) -> Head:
     lmp = Vs[lm]
     ey = np.asarray(Pm["eyes"]["centre"], float)
     anc = Pm["anchors"]
+    brow_mid = brow_centre(np.array([0.5]))[0]
     anchors = {
         "mouth_corner_L": Vs[idx[col["mL"], jm]],
         "mouth_corner_R": Vs[idx[col["mR"], jm]],
@@ -122,8 +123,8 @@ def build_builtin_head(resolution: int = 1) -> Head:
         "eye_R": ey * [-1, 1, 1],
         "chin": lmp[8],
         "nose_tip": lmp[30],
-        "brow_L": Vs[regions["brow_mid_L"]],
-        "brow_R": Vs[regions["brow_mid_R"]],
+        "brow_L": brow_mid,  # the skin under the brow's middle, at every resolution
+        "brow_R": brow_mid * [-1, 1, 1],
         "neck_base": np.asarray(anc["neck_base"], float),
         "neck_pivot": np.asarray(anc["neck_pivot"], float),
         "jaw_pivot": np.asarray(anc["jaw_pivot"], float),
@@ -204,8 +205,6 @@ def _landmarks(V: np.ndarray, info: dict, col: dict, n_outer: int):
         "lip_upper_border": idx[np.abs(A) <= am + 1e-9, ju],
         "lip_lower_border": idx[np.abs(A) <= am + 1e-9, jl],
         "mouth_corners": np.array([idx[col["mR"], jm], idx[col["mL"], jm]]),
-        "brow_mid_L": _nearest(V, outer, bc[2]),
-        "brow_mid_R": _nearest(V, outer, bc[2] * [-1, 1, 1]),
         "pockets": np.arange(n_outer, len(V)),
         "face_patch_grid": idx,
     }
