@@ -41,7 +41,7 @@ EN = [
     ("up 50% or 3.5 %", "up 50 percent or 3.5 percent"),
     ("1,000 people", "1,000 people"),
     ("£2bn deal", "2 billion pounds deal"),
-    ("call 555-1999", "call 555-1999"),
+    ("call 555-1999", "call 5 5 5, 1 9 9 9"),
     ("On 3/10/2024 at 14:30", "On March tenth, twenty twenty-four at fourteen thirty"),
     ("at 7:05 p.m. Then", "at seven oh five p m. Then"),
     ("at 7:05 p.m. sharp", "at seven oh five p m sharp"),
@@ -54,6 +54,11 @@ EN = [
     ("Sen. Warren met Lt. Col. Smith Jr. today", "Senator Warren met Lieutenant Colonel Smith "
      "Junior today"),
     ("a $5 fine, the $3 million was spent", "a 5 dollar fine, the 3 million dollars was spent"),
+    ("Call 555-0199 now.", "Call 5 5 5, 0 1 9 9 now."),
+    ("Phone: +44 20 7946 0958.", "Phone: plus 4 4, 2 0, 7 9 4 6, 0 9 5 8."),
+    ("Tel. 555 0199", "Telephone 5 5 5, 0 1 9 9"),
+    ("free on 0800 123 456", "free on 0 8 0 0, 1 2 3, 4 5 6"),
+    ("1 000 000 people in 1990-2000, 3-1, 007", "1 000 000 people in 1990-2000, 3-1, 007"),
 ]
 
 DE = [
@@ -82,6 +87,10 @@ DE = [
     ("Der 3.10.2024 war", "Der dritte Oktober zweitausendvierundzwanzig war"),
     ("Es kostet 14.30 Euro.", "Es kostet 14.30 Euro."),
     ("in den 1990er Jahren, die 20er", "in den neunzehnhundertneunziger Jahren, die zwanziger"),
+    ("Tel. 030 1234567", "Telefon 0 3 0, 1 2 3 4 5 6 7"),
+    ("Rufen Sie 030/1234567 an.", "Rufen Sie 0 3 0, 1 2 3 4 5 6 7 an."),
+    ("Hotline: 0800 22 33 44", "Hotline: 0 8 0 0, 2 2, 3 3, 4 4"),
+    ("unter 25000 Euro", "unter 25000 Euro"),
 ]
 
 PL = [
@@ -119,6 +128,10 @@ PL = [
      "imienia Kopernika"),
     ("$5 i €20", "5 dolarów i 20 euro"),
     ("Np. tak", "Na przykład tak"),
+    ("Infolinia 801 123 456.", "Infolinia 8 0 1, 1 2 3, 4 5 6."),
+    ("Dzwoń pod numer 22 123 45 67", "Dzwoń pod numer 2 2, 1 2 3, 4 5, 6 7"),
+    ("tel. +48 601 234 567", "telefon plus 4 8, 6 0 1, 2 3 4, 5 6 7"),
+    ("Było 1 000 000 osób", "Było 1 000 000 osób"),
 ]
 
 

@@ -28,6 +28,9 @@ def _said(text, lang, **kw):
      "dziewiątym roku o godzinie ósmej padało."),
     ("en", "We met at 7:05 p.m. on 3/10/2024.", "We met at seven oh five p m on March tenth, "
      "twenty twenty-four."),
+    ("en", "Call 0800 123 456.", "Call 0 8 0 0, 1 2 3, 4 5 6."),
+    ("de", "Tel. 030 1234567.", "Telefon 0 3 0, 1 2 3 4 5 6 7."),
+    ("pl", "Infolinia 801 123 456.", "Infolinia 8 0 1, 1 2 3, 4 5 6."),
 ])
 def test_the_voice_says_what_a_newsreader_says(lang, written, spoken):
     assert _said(written, lang) == _said(spoken, lang)
@@ -65,6 +68,12 @@ def test_times_dates_and_years_keep_their_words_as_written():
     u = synthesize("O godz. 14:30 w 1999 r. padało. Potem nie.", lang="pl", engine="espeak")
     assert [w.text for w in u.words][:5] == ["O godz.", "14:30", "w", "1999", "r."]
     assert [s.text for s in u.sentences] == ["O godz. 14:30 w 1999 r. padało.", "Potem nie."]
+
+
+def test_a_telephone_number_is_one_word_as_written_and_tel_ends_no_sentence():
+    u = synthesize("Tel. 030 1234567. Danach nichts.", lang="de", engine="espeak")
+    assert [w.text for w in u.words][:2] == ["Tel.", "030 1234567"]
+    assert [s.text for s in u.sentences] == ["Tel. 030 1234567.", "Danach nichts."]
 
 
 def test_german_ordinals_and_abbreviations_do_not_end_sentences():

@@ -403,7 +403,7 @@ def _abbreviation_pattern(written: str) -> re.Pattern[str]:
     return re.compile(r"(?<![\w.])" + r"\s*".join(parts) + right)
 
 
-_BEFORE = {"name": re.compile(r"\s+[^\W\d_]"), "digit": re.compile(r"\s*\d")}
+_BEFORE = {"name": re.compile(r"\s+[^\W\d_]"), "digit": re.compile(r"[\s:]*[+(]?\d")}
 
 
 def _fits_context(text: str, start: int, end: int, entry: dict[str, Any]) -> bool:
@@ -556,10 +556,31 @@ def _pl_decade_spans(text: str, table: Table) -> Iterator[Span]:
         yield Span(m.start(2), m.end(), stem + endings[m[1].lower()] + final)
 
 
+def _telephone_spans(text: str, table: Table) -> Iterator[Span]:
+    """Telephone numbers in running text, digit by digit in their written groups: an
+    international "+49 30 1234567", a trunk-prefixed "0800 123 456" or "030/1234567", or any
+    three or more digits within three words after "Tel.", "call", "Telefon", "infolinia" …
+    (``telephone_after``). Thousands written with spaces ("1 000 000") and dates stay."""
+    after = table.get("telephone_after", ())
+    group = r"\(?\d+\)?\d*"
+    pattern = rf"(?<![\w+,.])(?P<n>\+?{group}(?:[ \-/]{group})*)(?![\w%]|[.,]\d)"
+    for m in re.finditer(pattern, text):
+        written = m["n"]
+        digits = sum(ch.isdigit() for ch in written)
+        before = re.findall(r"[^\W\d_]+\.?", text[max(0, m.start() - 40):m.start()])[-3:]
+        cue = any(w.lower() in after or w.lower().rstrip(".") in after for w in before)
+        shaped = (written.startswith("+") or written.lstrip("(").startswith("0")) and digits >= 6
+        if re.fullmatch(r"\d{1,2}/\d{1,4}(?:/\d{2,4})?", written):
+            continue  # a date
+        thousands = re.fullmatch(r"\d{1,3}(?: \d{3})+", written)
+        if (cue and digits >= 3) or (shaped and not thousands):
+            yield Span(m.start(), m.end(), _say_telephone(written, table))
+
+
 _RULES: tuple[Callable[[str, Table], Iterator[Span]], ...] = (
     _numeric_date_spans, _time_spans, _decade_spans, _currency_spans, _percent_spans,
-    _de_ordinal_spans, _abbreviation_spans, _scale_spans, _year_spans, _pl_year_spans,
-    _pl_day_spans, _en_ordinal_spans,
+    _de_ordinal_spans, _abbreviation_spans, _telephone_spans, _scale_spans, _year_spans,
+    _pl_year_spans, _pl_day_spans, _en_ordinal_spans,
 )
 
 
