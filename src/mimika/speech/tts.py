@@ -9,9 +9,12 @@ layer can look ahead) and the results are concatenated.
 
 from __future__ import annotations
 
+import functools
+import json
 import logging
 import os
 import re
+from importlib import resources
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -30,15 +33,15 @@ ENGINES = ("auto", "espeak", "piper")
 ENV_ENGINE = "MIMIKA_TTS"  #: default engine for every command (auto | espeak | piper)
 SENTENCE_PAUSE = 0.3  #: seconds of silence at least between two spoken sentences
 
-#: abbreviations that end with a dot but do not end a sentence (lower case, without the dot)
-_ABBREV = {
-    "dr", "mr", "mrs", "ms", "prof", "st", "vs", "etc", "e.g", "i.e", "no", "nr", "fig", "approx",
-    "z.b", "bzw", "usw", "ca", "vgl", "hr", "fr", "str", "d.h", "u.a", "inż", "np", "ok",
-    "tzn", "wg", "ul", "itd", "itp", "tj", "jr", "sr", "co", "inc", "ltd", "a.m", "p.m",
-}
-#: of those, the ones that often end a sentence too: a break when the next word is capitalised
-#: (not "Jr.", "Inc.": "King Jr. Day", "Apple Inc. Chief Executive …" go on)
-_MAY_END = {"etc", "usw", "itd", "itp", "a.m", "p.m"}
+@functools.cache
+def _sentence_abbreviations() -> tuple[frozenset[str], frozenset[str]]:
+    """Abbreviations after which a '.' ends no sentence, in any language, and those of them
+    that may end one before a capitalised word (``data/sentence_ends.json``)."""
+    path = resources.files("mimika.speech").joinpath("data/sentence_ends.json")
+    d = json.loads(path.read_text(encoding="utf-8"))
+    return frozenset(d["no_break"]), frozenset(d["may_end"])
+
+
 _SENT_END = re.compile(r"[.!?…]+[\"'»”)\]]*(?=\s+|$)")
 
 
@@ -52,6 +55,7 @@ def split_sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
     """
     from mimika.speech.normalize import no_break_after
 
+    abbreviations, may_end = _sentence_abbreviations()
     out: list[tuple[str, int]] = []
     for para in re.finditer(r"\S(?:.*?\S)?(?=\s*\n\s*\n|\s*$)", text, flags=re.S):
         start = para.start()
@@ -62,7 +66,7 @@ def split_sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
             last = before[-1].lower().rstrip(".") if before else ""
             after = seg[m.end():].lstrip()[:1]
             if m.group(0).startswith(".") and len(m.group(0)) == 1 and (
-                (last in _ABBREV and not (last in _MAY_END and after.isupper()))
+                (last in abbreviations and not (last in may_end and after.isupper()))
                 or (len(last) == 1 and last.isalpha())
                 or no_break_after(seg, m.start(), lang)
             ):
