@@ -568,7 +568,7 @@ def _telephone_spans(text: str, table: Table) -> Iterator[Span]:
         written = m["n"]
         digits = sum(ch.isdigit() for ch in written)
         before = re.findall(r"[^\W\d_]+\.?", text[max(0, m.start() - 40):m.start()])[-3:]
-        cue = any(w.lower() in after or w.lower().rstrip(".") in after for w in before)
+        cue = any(w.lower().rstrip(".") in after for w in before)
         shaped = (written.startswith("+") or written.lstrip("(").startswith("0")) and digits >= 6
         if re.fullmatch(r"\d{1,2}/\d{1,4}(?:/\d{2,4})?", written):
             continue  # a date
