@@ -759,6 +759,8 @@ def _say_characters(text: str) -> str:
 
 
 def _say_telephone(text: str, table: Table | None) -> str:
+    if text.lstrip().startswith("+"):  # "+49 (0)30 …": the trunk 0 is not dialled from abroad
+        text = re.sub(r"\(0\)", " ", text)
     groups = [g for g in re.split(r"[\s\-./()]+", text.strip()) if g]
     plus = table["plus"] if table else "+"
     spoken = [" ".join(plus if ch == "+" else ch for ch in g if ch.isalnum() or ch == "+")
