@@ -10,6 +10,7 @@ import numpy as np
 
 from mimika.face.rig import Rig
 from mimika.facs import AU_CATALOGUE, base_code, parse_au_values
+from mimika.render.camera import FILL
 
 Progress = Callable[[int, int], None]
 
@@ -22,10 +23,6 @@ def _rig(head: str | Path | Rig | None, fields: str | Path | None) -> Rig:
     return load_head(DEFAULT_HEAD if head is None else head, fields=fields)[1]
 
 
-def _framing(fill: float | None) -> dict[str, float]:
-    return {} if fill is None else {"fill": fill}
-
-
 def render_pose(
     aus: Mapping[str, float] | list[str],
     *,
@@ -35,19 +32,18 @@ def render_pose(
     fields: str | Path | None = None,
     samples: int = 4,
     lighting: Any = None,
-    fill: float | None = None,
+    fill: float = FILL,
 ) -> np.ndarray:
     """Render ``aus`` (``{"AU12": 1}`` or ``["AU12=1"]``) on ``head`` (default: the default
     character) with their appearance changes, lit by ``lighting`` (a ``--light`` spec or a
     :class:`~mimika.render.lighting.Lighting`; default ``studio``), the face filling
-    ``fill`` of the image height (default :data:`~mimika.render.camera.FILL`); returns
+    ``fill`` of the image height (default: a portrait); returns
     (H, W, 3) uint8."""
     from mimika.render import Renderer
 
     rig = _rig(head, fields)
     vals = rig.check(parse_au_values(aus))
-    with Renderer(rig.head, size=size, samples=samples, lighting=lighting,
-                  **_framing(fill)) as r:
+    with Renderer(rig.head, size=size, samples=samples, lighting=lighting, fill=fill) as r:
         return r.render(rig.deform(vals), view=view, aus=vals)
 
 
@@ -60,7 +56,7 @@ def au_sheet(
     fields: str | Path | None = None,
     progress: Progress | None = None,
     lighting: Any = None,
-    fill: float | None = None,
+    fill: float = FILL,
 ) -> np.ndarray:
     """A labelled contact sheet: neutral, then one tile per modelled AU at full intensity."""
     from mimika.render import Renderer, contact_sheet
@@ -68,7 +64,7 @@ def au_sheet(
     rig = _rig(head, fields)
     codes = list(rig.supported_bilateral)
     images, labels = [], []
-    with Renderer(rig.head, size=tile, lighting=lighting, **_framing(fill)) as r:
+    with Renderer(rig.head, size=tile, lighting=lighting, fill=fill) as r:
         for i, code in enumerate([None, *codes]):
             aus = {code: 1.0} if code else {}
             images.append(r.render(rig.deform(aus), view=view, aus=aus))

@@ -26,9 +26,12 @@ def cmd_pose(args: argparse.Namespace) -> int:
         from mimika.knowledge.expressions import expression_aus
 
         aus = expression_aus(args.expression, args.intensity)
+    from mimika.render.camera import FILL
+
     light = parse_light(args.light)
-    if args.face_height is not None and not 0.05 <= args.face_height <= 1.0:
-        raise ParameterError(f"--face-height {args.face_height:g} must be in [0.05, 1]: the "
+    fill = FILL if args.face_height is None else args.face_height
+    if not 0.05 <= fill <= 1.0:
+        raise ParameterError(f"--face-height {fill:g} must be in [0.05, 1]: the "
                              "share of the image height the face fills (0.6 a portrait, 0.75 "
                              "a close-up)")
     if args.intensity != 1.0 and not args.expression:
@@ -49,11 +52,10 @@ def cmd_pose(args: argparse.Namespace) -> int:
     _, rig = load_head(args.head, fields=args.fields, identity=identity)
     if args.grid:
         img = au_sheet(head=rig, view=args.view, columns=args.columns, lighting=light,
-                       fill=args.face_height,
-                       progress=progress_bar(args.quiet, "rendering AUs"))
+                       fill=fill, progress=progress_bar(args.quiet, "rendering AUs"))
     else:
         img = render_pose(aus, head=rig, view=args.view, size=args.size, samples=args.samples,
-                          lighting=light, fill=args.face_height)
+                          lighting=light, fill=fill)
     save_png(img, args.output)
     if not args.quiet:
         print(f"wrote {args.output} ({img.shape[1]}x{img.shape[0]})")

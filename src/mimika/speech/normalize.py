@@ -556,24 +556,29 @@ def _pl_decade_spans(text: str, table: Table) -> Iterator[Span]:
         yield Span(m.start(2), m.end(), stem + endings[m[1].lower()] + final)
 
 
+_PHONE_GROUP = r"\(?\d+\)?\d*"
+_PHONE = re.compile(rf"(?<![\w+,.])(?P<n>\+?{_PHONE_GROUP}(?:[ \-/]{_PHONE_GROUP})*)"
+                    r"(?![\w%]|[.,]\d)")
+_SLASH_DATE = re.compile(r"\d{1,2}/\d{1,4}(?:/\d{2,4})?")
+_THOUSANDS = re.compile(r"\d{1,3}(?: \d{3})+")
+_WORD = re.compile(r"[^\W\d_]+\.?")
+
+
 def _telephone_spans(text: str, table: Table) -> Iterator[Span]:
     """Telephone numbers in running text, digit by digit in their written groups: an
     international "+49 30 1234567", a trunk-prefixed "0800 123 456" or "030/1234567", or any
     three or more digits within three words after "Tel.", "call", "Telefon", "infolinia" …
     (``telephone_after``). Thousands written with spaces ("1 000 000") and dates stay."""
     after = table.get("telephone_after", ())
-    group = r"\(?\d+\)?\d*"
-    pattern = rf"(?<![\w+,.])(?P<n>\+?{group}(?:[ \-/]{group})*)(?![\w%]|[.,]\d)"
-    for m in re.finditer(pattern, text):
+    for m in _PHONE.finditer(text):
         written = m["n"]
+        if _SLASH_DATE.fullmatch(written):
+            continue
         digits = sum(ch.isdigit() for ch in written)
-        before = re.findall(r"[^\W\d_]+\.?", text[max(0, m.start() - 40):m.start()])[-3:]
+        before = _WORD.findall(text, max(0, m.start() - 40), m.start())[-3:]
         cue = any(w.lower().rstrip(".") in after for w in before)
         shaped = (written.startswith("+") or written.lstrip("(").startswith("0")) and digits >= 6
-        if re.fullmatch(r"\d{1,2}/\d{1,4}(?:/\d{2,4})?", written):
-            continue  # a date
-        thousands = re.fullmatch(r"\d{1,3}(?: \d{3})+", written)
-        if (cue and digits >= 3) or (shaped and not thousands):
+        if (cue and digits >= 3) or (shaped and not _THOUSANDS.fullmatch(written)):
             yield Span(m.start(), m.end(), _say_telephone(written, table))
 
 
