@@ -1,6 +1,6 @@
 """Artefacts of dressed characters: each preset and a generated cast (every clothes and hair
 asset, ages 18–80, every origin mix) at rest, in AU poses, head turns and body moves, checked
-in the newsreader's HD shot (:func:`mimika.face.makehuman.artefacts.check_frame`).
+in the newsreader's HD shot (:func:`mimika.render.artefacts.check_frame`).
 
     python bench/bench_artefacts.py [--only amara,mei] [--sheet docs/img/artefacts.png]
 
@@ -95,9 +95,9 @@ def main() -> None:
     ap.add_argument("--only", help="comma-separated character names")
     ap.add_argument("--sheet", type=Path, help="write the contact sheet here (PNG)")
     a = ap.parse_args()
-    from mimika.face.makehuman.artefacts import check_frame
     from mimika.newsreader.pipeline import news_camera
     from mimika.render import Renderer
+    from mimika.render.artefacts import check_frame
     from mimika.render.lighting import NEWS
     from mimika.render.sheet import contact_sheet
     from mimika.render.skin import SkinParams

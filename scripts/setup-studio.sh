@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Install the studio's front-end dependency (three.js, pinned in src/mimika/studio/web/
-# package-lock.json) and copy the ES modules the page imports into
-# src/mimika/studio/static/vendor/three/ (served through an import map; no bundler).
+# Install the front-end dependency of the studio and serve pages (three.js, pinned in
+# src/mimika/web/npm/package-lock.json) and copy the ES modules the pages import into
+# src/mimika/web/vendor/three/ (served at /vendor/three through an import map; no bundler).
 # Needs npm and the npm registry on the first run; later runs are no-ops.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-web=src/mimika/studio/web
-vendor=src/mimika/studio/static/vendor/three
+web=src/mimika/web/npm
+vendor=src/mimika/web/vendor/three
 stamp="$vendor/.installed"
 if [ -f "$stamp" ] && [ "$stamp" -nt "$web/package-lock.json" ]; then
   exit 0

@@ -94,7 +94,7 @@ def serve_app(app):
     import threading
     import time
 
-    from mimika.studio.server import server
+    from mimika.web.server import server
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

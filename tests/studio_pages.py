@@ -48,7 +48,7 @@ def server(tmp_path_factory, request):
     uvicorn = pytest.importorskip("uvicorn")
     from mimika.errors import DataError
     from mimika.studio.app import create_app
-    from mimika.studio.assets import ensure_vendor
+    from mimika.web.three import ensure_vendor
 
     try:
         ensure_vendor()

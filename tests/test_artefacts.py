@@ -90,8 +90,8 @@ def presets():
 
 
 def _check(head, rig, pose):
-    from mimika.face.makehuman.artefacts import check_frame
     from mimika.newsreader.pipeline import news_camera
+    from mimika.render.artefacts import check_frame
     from mimika.render.lighting import NEWS
 
     cam = news_camera(head, "front", 16 / 9)
@@ -138,9 +138,9 @@ def _light_skin_between_hair(head, rig, pose) -> int:
     forehead."""
     from scipy import ndimage
 
-    from mimika.face.makehuman.artefacts import id_layers
     from mimika.newsreader.pipeline import news_camera
     from mimika.render import Renderer
+    from mimika.render.artefacts import id_layers
     from mimika.render.skin import SkinParams
 
     size = (1280, 720)
@@ -183,9 +183,9 @@ def test_highlights_leave_light_hair_its_colour_and_dark_hair_its_sheen(presets,
 
     from scipy import ndimage
 
-    from mimika.face.makehuman.artefacts import id_layers
     from mimika.newsreader.pipeline import news_camera
     from mimika.render import Renderer
+    from mimika.render.artefacts import id_layers
     from mimika.render.renderer import load_materials
     from mimika.render.skin import SkinParams
 

@@ -85,7 +85,7 @@ def test_the_served_names_and_the_allow_list_pass(server, http, host):
 
 
 def test_a_studio_bound_to_every_interface_serves_ip_literals_but_not_names():
-    from mimika.studio.guard import HostPolicy
+    from mimika.web.guard import HostPolicy
 
     p = HostPolicy("0.0.0.0")
     assert p.allows("192.168.1.20:8765") and p.allows("[fe80::1]:8765")
@@ -98,7 +98,7 @@ def test_a_studio_bound_to_every_interface_serves_ip_literals_but_not_names():
     "localhost:80:80", "localhost:http", "[::1]x", "[127.0.0.1]:8765", "local host", "",
     "localhost/evil", "127.0.0.1.attacker.test"])
 def test_host_headers_are_parsed_as_authorities(host):
-    from mimika.studio.guard import HostPolicy
+    from mimika.web.guard import HostPolicy
 
     assert not HostPolicy("127.0.0.1", ["studio.lan"]).allows(host)
     assert not HostPolicy("0.0.0.0").allows(host)

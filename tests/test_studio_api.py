@@ -379,7 +379,7 @@ def test_unknown_endpoint_and_method(client):
 
 
 def test_index_and_static(client):
-    from mimika.studio.assets import vendor_ready
+    from mimika.web.three import vendor_ready
 
     r = client.get("/")
     assert r.status_code == (200 if vendor_ready() else 503)

@@ -77,8 +77,8 @@ def test_pose_exports_are_kept_per_head_and_pose(state, monkeypatch):
 def test_a_character_export_reuses_its_morph_targets_byte_for_byte():
     from mimika.face.heads import load_head
     from mimika.io.gltf_skinned import _targets
-    from mimika.studio.state import gltf_bytes
     from mimika.tracks import AUTrack
+    from mimika.web.glb import gltf_bytes
 
     _, rig = load_head("amara")
     pose = AUTrack.constant({"AU12": 0.6}, n_frames=1, fps=30)

@@ -12,7 +12,7 @@ from mimika.commands._util import LOOPBACK, check_web_server, limit_options
 def cmd_serve(args: argparse.Namespace) -> int:
     check_web_server("serve", args.port)
     from mimika.serve.app import create_app
-    from mimika.studio.server import server
+    from mimika.web.server import server
 
     token = args.token
     if token is None and args.host not in LOOPBACK:

@@ -19,8 +19,8 @@ def default_projects_dir() -> Path:
 def cmd_studio(args: argparse.Namespace) -> int:
     check_web_server("studio", args.port)
     from mimika.studio.app import create_app
-    from mimika.studio.assets import ensure_vendor
-    from mimika.studio.server import server
+    from mimika.web.server import server
+    from mimika.web.three import ensure_vendor
 
     ensure_vendor()
     projects = Path(args.projects) if args.projects else default_projects_dir()

@@ -64,6 +64,21 @@ def parse_article(text: str, *, source: str = "<article>") -> Article:
     return Article(tuple(p for p in paras if p), None, source)
 
 
+def article_sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
+    """``[(sentence, char_offset)]`` of ``text`` read as ``mimika news`` reads an article:
+    paragraphs (blank lines), whitespace joined, a ``<speak>`` script's spoken text, each
+    paragraph split into sentences as the TTS splits them. Offsets count in the joined text."""
+    from mimika.speech.tts import split_sentences
+
+    if not text.strip():
+        raise ParameterError("the text is empty; type something to speak")
+    out, base = [], 0
+    for para in parse_article(text, source="the text").paragraphs:
+        out += [(sent, base + off) for sent, off in split_sentences(para, lang) or [(para, 0)]]
+        base += len(para) + 2
+    return out
+
+
 def _pad(utt: Any, lead: float, tail: float) -> Any:
     """``utt`` with ``lead`` s of silence before and ``tail`` s after (times shifted)."""
     from mimika.speech import Phone, Utterance

@@ -43,7 +43,7 @@ class TokenGuard:
 
     async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
         if self.token and scope["type"] in ("http", "websocket") and not self._ok(scope):
-            from mimika.studio.guard import refuse
+            from mimika.web.guard import refuse
 
             await refuse(scope, send, 401, "this mimika serve needs its token: open the "
                                            "address it printed (with ?token=...) or send "
@@ -52,26 +52,40 @@ class TokenGuard:
         await self.app(scope, receive, send)
 
 
+class ServeState:
+    """What every connection shares: the one head (loaded once, its GLB built once) and the
+    lock espeak-ng needs (it is not re-entrant)."""
+
+    def __init__(self, head: str) -> None:
+        from mimika.web.heads import HeadCache, check_head
+
+        self.head = check_head(head)
+        self._heads = HeadCache(1)
+        self.espeak_lock = threading.Lock()
+
+    def glb(self) -> tuple[bytes, str]:
+        """The head as GLB (no animation) and its ETag."""
+        return self._heads.glb(self.head)
+
+
 def create_app(*, head: str | None = None, host: str = "127.0.0.1",
                allowed_hosts: tuple[str, ...] | list[str] = (), token: str | None = None,
                max_body: int | None = None, warm_up: bool = False) -> FastAPI:
     """The server: ``/ws`` (:mod:`mimika.serve.session`), ``/`` the example page,
     ``/player.js``, ``/head.glb`` (``head``, default the default character), ``/protocol.json``.
     Only Host names of ``host`` (or ``allowed_hosts``) are answered; ``token`` guards all."""
-    from mimika.cachedir import cache_dir
     from mimika.face.heads import DEFAULT_HEAD
     from mimika.serve.session import Session
-    from mimika.studio.assets import VENDOR, ensure_vendor
-    from mimika.studio.guard import HostGuard, HostPolicy
-    from mimika.studio.state import StudioState
+    from mimika.web.guard import HostGuard, HostPolicy
+    from mimika.web.three import URL, VENDOR, ensure_vendor
 
-    state = StudioState(cache_dir("serve", "projects"), head=head or DEFAULT_HEAD)
+    state = ServeState(head or DEFAULT_HEAD)
     app = FastAPI(title="mimika serve", version=mimika.__version__, docs_url=None,
                   redoc_url=None, openapi_url=None)
     app.state.serve = state
     app.state.max_body = max_body or limits.current().max_body
     ensure_vendor()
-    app.mount("/vendor/three", StaticFiles(directory=VENDOR), name="three")
+    app.mount(URL, StaticFiles(directory=VENDOR), name="three")
     app.add_middleware(TokenGuard, token=token)
     app.add_middleware(HostGuard, policy=HostPolicy(host, allowed_hosts))  # outermost
     if warm_up:
@@ -95,7 +109,7 @@ def create_app(*, head: str | None = None, host: str = "127.0.0.1",
 
     @app.get("/head.glb")
     def head_glb(request: Request) -> Response:
-        data, etag = state.glb(None)
+        data, etag = state.glb()
         if request.headers.get("if-none-match") == etag:
             return Response(status_code=304, headers={"ETag": etag})
         return Response(data, media_type="model/gltf-binary",
@@ -116,12 +130,12 @@ def create_app(*, head: str | None = None, host: str = "127.0.0.1",
     return app
 
 
-def _warm(state: Any) -> None:
+def _warm(state: ServeState) -> None:
     """Load the voice and the head's GLB so the first speak and page load are quick."""
     from mimika.serve.speech import speak_part
 
     try:
         speak_part(state, "Hello.", False, lang="en", voice=None, rate=175)
-        state.glb(None)
+        state.glb()
     except Exception:  # warm-up is best effort; the real request reports its error
         log.exception("serve: warm-up failed")

@@ -33,9 +33,9 @@ def sentences(body: str, ssml: bool, lang: str) -> list[str]:
     or the whole SSML document."""
     if ssml:
         return [body]
-    from mimika.studio.speaking import sentences as split
+    from mimika.newsreader.article import article_sentences
 
-    return [s for s, _ in split(body, lang)]
+    return [s for s, _ in article_sentences(body, lang)]
 
 
 def speak_part(state: Any, part: str, ssml: bool, *, lang: str, voice: str | None,
@@ -62,15 +62,15 @@ def part_messages(part: Part, t0: float, *, index: int, mood: str | None,
     """The part's ``frames``, ``audio`` and ``sentence`` messages (times from ``t0`` s) and
     the last behaviour frame (where the next part starts from)."""
     from mimika.behaviour import merge_layers
+    from mimika.behaviour.sentences import SPEECH_LAYERS, behaviour_track
     from mimika.serve.frames import frames
     from mimika.speech import combine
     from mimika.speech.export import viseme_cues
-    from mimika.studio.behaviour import LAYERS, behaviour_track
 
     u, mouth = part.utterance, part.mouth
     n = mouth.n_frames
     layers: dict[str, AUTrack] = {}
-    beh = behaviour_track(u, fps=FPS, layers=LAYERS, seed=index, start=start, mood=mood)
+    beh = behaviour_track(u, fps=FPS, layers=SPEECH_LAYERS, seed=index, start=start, mood=mood)
     if beh is not None and beh.channels:
         layers["behaviour"] = beh
     face: dict[str, float] = dict(mood_face)

@@ -2,7 +2,7 @@
 
 Every error reaches the client as ``{"error": "…"}`` with a 4xx status (5xx only for bugs and
 exports past their time limit); request bodies are limited to :data:`MAX_BODY` bytes;
-requests naming a Host the studio does not serve (DNS rebinding, :mod:`mimika.studio.guard`)
+requests naming a Host the studio does not serve (DNS rebinding, :mod:`mimika.web.guard`)
 and writes from another origin are refused.
 """
 
@@ -26,11 +26,12 @@ from mimika import limits
 from mimika.errors import MimikaError
 from mimika.face.heads import DEFAULT_HEAD
 from mimika.studio.state import StudioState
+from mimika.web.three import URL as THREE_URL
+from mimika.web.three import VENDOR, vendor_ready
 
 log = logging.getLogger(__name__)
 
 STATIC = Path(__file__).parent / "static"
-VENDOR = STATIC / "vendor" / "three" / "three.module.js"
 #: largest accepted request body (bytes) and WebSocket message (mimika.limits: max_body)
 MAX_BODY = limits.DEFAULTS.max_body
 
@@ -143,9 +144,10 @@ def create_app(projects_dir: str | Path, *, head: str = DEFAULT_HEAD,
     """
     from contextlib import asynccontextmanager
 
-    from mimika.studio.guard import HostGuard, HostPolicy
-    from mimika.studio.jobs import Jobs, sweep_temp_dirs
+    from mimika.studio.jobs import Jobs
     from mimika.studio.routers import ROUTERS
+    from mimika.web.glb import sweep_temp_dirs
+    from mimika.web.guard import HostGuard, HostPolicy
 
     state = StudioState(projects_dir, head=head, library_path=library_path,
                         controller_path=controller_path)
@@ -207,10 +209,11 @@ def create_app(projects_dir: str | Path, *, head: str = DEFAULT_HEAD,
 
     @app.get("/", include_in_schema=False)
     def index() -> Any:
-        if not VENDOR.is_file():
+        if not vendor_ready():
             return HTMLResponse(_MISSING, status_code=503)
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-cache"})
 
+    app.mount(THREE_URL, StaticFiles(directory=VENDOR, check_dir=False), name="three")
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
     return app
 

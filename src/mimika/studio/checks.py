@@ -42,8 +42,8 @@ def plain_problem(problem: str, doc: Any) -> str:
 
 def studio_problems(project: Any, *, library: Any, heads: list[str]) -> list[str]:
     """What the studio cannot use in a (format-valid) ``project``."""
+    from mimika.behaviour.sentences import SPEECH_LAYERS
     from mimika.facs.blender import Blender
-    from mimika.studio.behaviour import LAYERS
 
     out: list[str] = []
     st = project.settings
@@ -55,9 +55,9 @@ def studio_problems(project: Any, *, library: Any, heads: list[str]) -> list[str
             if ev.kind == "expression" and ev.name not in library:
                 out.append(f"{track_label(ch.name)}, trigger {i + 1} (at {ev.start:.2f} s): "
                            f"there is no expression called “{ev.name}” in your library")
-    layers = st.get("behaviour", list(LAYERS))
-    if not (isinstance(layers, list) and all(x in LAYERS for x in layers)):
-        out.append(f"behaviour: must list some of {', '.join(LAYERS)}")
+    layers = st.get("behaviour", list(SPEECH_LAYERS))
+    if not (isinstance(layers, list) and all(x in SPEECH_LAYERS for x in layers)):
+        out.append(f"behaviour: must list some of {', '.join(SPEECH_LAYERS)}")
     off = st.get("blender_off", [])
     if not isinstance(off, list) or not all(isinstance(x, str) for x in off):
         out.append("blender_off: must be a list of AU Blender rules such as 12<15Z")

@@ -12,17 +12,12 @@ full waits up to :data:`WAIT` seconds, then gets 503.
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import os
 import re
-import shutil
-import tempfile
 import threading
 import time
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from fastapi import HTTPException
@@ -40,7 +35,6 @@ WAIT = 10.0
 #: weight of one MP4 frame against one CSV/glTF frame
 MP4_WEIGHT = 50
 _JOB_ID = re.compile(r"^[A-Za-z0-9_\-]{1,40}$")
-_TEMP = "mimika-studio-"
 
 
 class Cancelled(MimikaError):
@@ -162,26 +156,3 @@ class Jobs:
                 job.cancel("the client went away")
             if job.cancelled:  # answer now; the thread stops at its next check
                 raise job.error()
-
-
-@contextlib.contextmanager
-def temp_dir() -> Iterator[Path]:
-    """A temporary folder for one export, named with this process's id (see
-    :func:`sweep_temp_dirs`)."""
-    with tempfile.TemporaryDirectory(prefix=f"{_TEMP}{os.getpid()}-") as d:
-        yield Path(d)
-
-
-def sweep_temp_dirs() -> int:
-    """Remove the export folders of studios that were killed; returns how many."""
-    from mimika.io.atomic import pid_alive
-
-    n = 0
-    base = Path(tempfile.gettempdir())
-    with contextlib.suppress(OSError):
-        for p in base.glob(_TEMP + "*-*"):
-            pid = p.name[len(_TEMP):].split("-", 1)[0]
-            if pid.isdigit() and p.is_dir() and not pid_alive(int(pid)):
-                shutil.rmtree(p, ignore_errors=True)
-                n += 1
-    return n

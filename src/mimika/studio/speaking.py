@@ -28,23 +28,6 @@ def speak_request(text: str, project: Any, *, fps: float) -> Any:
     return SpeakRequest(text=text, lang=str(project.settings.get("lang", "en")), fps=fps)
 
 
-def sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
-    """``[(sentence, char_offset)]`` of ``text`` read as ``mimika news`` reads an article:
-    paragraphs (blank lines), whitespace joined, a ``<speak>`` script's spoken text, each
-    paragraph split into sentences as the TTS splits them. Offsets count in the joined text."""
-    from mimika.errors import ParameterError
-    from mimika.newsreader.article import parse_article
-    from mimika.speech.tts import split_sentences
-
-    if not text.strip():
-        raise ParameterError("the text is empty; type something to speak")
-    out, base = [], 0
-    for para in parse_article(text, source="the text").paragraphs:
-        out += [(sent, base + off) for sent, off in split_sentences(para, lang) or [(para, 0)]]
-        base += len(para) + 2
-    return out
-
-
 def synth_segment(state: StudioState, text: str, char0: int, t0: float, *, lang: str,
                   rate: int, fps: float) -> SpeechSegment:
     """Synthesise one sentence (the default voice for ``lang``, serialised; kept by the
@@ -65,16 +48,18 @@ def synth_segment(state: StudioState, text: str, char0: int, t0: float, *, lang:
 
 def warm(state: StudioState) -> None:
     """Load the voice and the behaviour layers' data, so the first Speak is quick."""
-    from mimika.studio.behaviour import LAYERS, behaviour_track
+    from mimika.behaviour.sentences import SPEECH_LAYERS, behaviour_track
 
     seg = synth_segment(state, "Good evening.", 0, 0.0, lang="en", rate=175, fps=30.0)
-    behaviour_track(seg.utterance, fps=30.0, layers=LAYERS)
+    behaviour_track(seg.utterance, fps=30.0, layers=SPEECH_LAYERS)
 
 
 def synth_all(state: StudioState, entry: SpeechEntry, *, fps: float) -> SpeechEntry:
     """Fill ``entry`` with every sentence of its text (for the non-streaming endpoints)."""
+    from mimika.newsreader.article import article_sentences
+
     t0 = 0.0
-    for sent, char0 in sentences(entry.text, entry.lang):
+    for sent, char0 in article_sentences(entry.text, entry.lang):
         seg = synth_segment(state, sent, char0, t0, lang=entry.lang, rate=entry.rate, fps=fps)
         entry.segments.append(seg)
         t0 += seg.duration
@@ -100,13 +85,13 @@ def mix_of(project: dict[str, Any] | None, state: StudioState | None = None, *,
     ``blend`` overrides the project's AU Blender switch (the page sends its checkbox)."""
     if not project:
         return Mix(blend=bool(blend))
+    from mimika.behaviour.sentences import SPEECH_LAYERS
     from mimika.markup.project import project_from_dict
-    from mimika.studio.behaviour import LAYERS
 
     proj = project_from_dict(project, source="project")
     st = proj.settings
     layers = st.get("behaviour", [])
-    layers = tuple(x for x in LAYERS if isinstance(layers, list) and x in layers)
+    layers = tuple(x for x in SPEECH_LAYERS if isinstance(layers, list) and x in layers)
     off = st.get("blender_off", [])
     off = tuple(str(x) for x in off) if isinstance(off, list) else ()
     return Mix(proj.timeline, layers, bool(st.get("blend")) if blend is None else blend, off,
@@ -116,7 +101,7 @@ def mix_of(project: dict[str, Any] | None, state: StudioState | None = None, *,
 def segment_behaviour(segments: list[SpeechSegment], index: int, mix: Mix, *, fps: float
                       ) -> Any:
     """Behaviour track of sentence ``index`` (cached; sentences join without a jump)."""
-    from mimika.studio.behaviour import behaviour_track
+    from mimika.behaviour.sentences import behaviour_track
 
     if not mix.layers:
         return None

@@ -16,6 +16,8 @@ import numpy as np
 from mimika import limits
 from mimika.errors import DataError, MimikaError, ParameterError
 from mimika.face.heads import DEFAULT_HEAD
+from mimika.web.glb import gltf_bytes
+from mimika.web.heads import HeadCache, check_head, head_infos
 
 log = logging.getLogger(__name__)
 
@@ -70,25 +72,6 @@ class SpeechEntry:
         return (np.concatenate(parts) if parts else np.zeros(0, np.float32)), int(sr)
 
 
-def gltf_bytes(rig: Any, track: Any, *, name: str = "mimika", keep: bool = False) -> bytes:
-    """``rig``'s head (+ ``track``'s animation) as GLB bytes, through :func:`write_gltf`;
-    with ``keep`` (a download), an avatar file is written again with the animation added
-    (:mod:`mimika.io.gltf_avatar`) instead of in the page's layout."""
-    from mimika.face.heads.gltf_export import avatar_export
-    from mimika.io.gltf import write_gltf
-    from mimika.io.gltf_avatar import write_avatar_gltf
-    from mimika.render.appearance import export_appearance
-    from mimika.studio.jobs import temp_dir
-
-    with temp_dir() as d:
-        kept = avatar_export(rig, track) if keep else None
-        if kept is not None:
-            return write_avatar_gltf(d / f"{name}.glb", kept, track).read_bytes()
-        attributes, extras = export_appearance(rig.head)
-        return write_gltf(d / f"{name}.glb", rig, track, attributes=attributes,
-                          extras=extras).read_bytes()
-
-
 def speech_key(text: str, lang: str, rate: int) -> str:
     h = hashlib.sha1(f"{lang}|{rate}|{text}".encode()).hexdigest()
     return h[:20]
@@ -109,17 +92,10 @@ class StudioState:
                  speech_cache: int = 32, heads_cache: int = 2):
         self.projects_dir = Path(projects_dir)
         self.projects_dir.mkdir(parents=True, exist_ok=True)
-        names = head_names()
-        if head not in names and not Path(head).exists():
-            raise DataError(f"studio head {head!r} is not one of the heads here "
-                            f"({', '.join(names)}) nor a file (run 'mimika heads')")
-        self.head_name = head
+        self.head_name = check_head(head)
         self.library_path = Path(library_path) if library_path is not None else None
         self.controller_path = controller_path
-        self._head_lock = threading.Lock()
-        #: loaded heads by name, most recently used last: (rig, glb bytes or None, etag)
-        self._heads: OrderedDict[str, list[Any]] = OrderedDict()
-        self._heads_max = heads_cache
+        self._heads = HeadCache(heads_cache)
         self._poses: OrderedDict[tuple, bytes] = OrderedDict()
         self._sentences: OrderedDict[tuple, Any] = OrderedDict()
         self._sentence_bytes = 0
@@ -161,33 +137,13 @@ class StudioState:
     def head_names(self) -> list[str]:
         return [h.name for h in self.head_infos()]
 
-    def _entry(self, name: str | None) -> list[Any]:
-        name = self.head(name)
-        with self._head_lock:
-            e = self._heads.get(name)
-            if e is None:
-                from mimika.face.heads import load_head
-
-                _, rig = load_head(name)
-                log.info("studio: loaded head %s", name)
-                e = self._heads[name] = [rig, None, ""]
-                while len(self._heads) > self._heads_max:
-                    self._heads.popitem(last=False)
-            self._heads.move_to_end(name)
-            return e
-
     def rig(self, name: str | None = None) -> Any:
         """The rig of head ``name`` (loaded once; the last few heads stay loaded)."""
-        return self._entry(name)[0]
+        return self._heads.rig(self.head(name))
 
     def glb(self, name: str | None = None) -> tuple[bytes, str]:
         """Head ``name`` as GLB (no animation) and its ETag; built once per head."""
-        e = self._entry(name)
-        with self._head_lock:
-            if e[1] is None:
-                e[1] = gltf_bytes(e[0], None, name=self.head(name))
-                e[2] = '"' + hashlib.sha1(e[1]).hexdigest()[:16] + '"'
-            return e[1], e[2]
+        return self._heads.glb(self.head(name))
 
     def pose_glb(self, name: str | None, aus: dict[str, float], *, fps: float,
                  label: str) -> bytes:
@@ -330,18 +286,6 @@ class StudioState:
             except (ImportError, ValueError, MimikaError):
                 continue
         return None
-
-
-def head_infos() -> list[Any]:
-    """:func:`mimika.face.heads.list_heads` (the heads mimika knows, installed or not)."""
-    from mimika.face.heads import list_heads
-
-    return list_heads()
-
-
-def head_names() -> list[str]:
-    """Names of every head :func:`mimika.face.heads.list_heads` knows (installed or not)."""
-    return [h.name for h in head_infos()]
 
 
 GROUPS = ("upper face", "lower face linear", "lower face orbital", "head", "eyes")

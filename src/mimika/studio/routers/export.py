@@ -11,11 +11,12 @@ from starlette.concurrency import run_in_threadpool
 
 from mimika import limits
 from mimika.studio import speaking
-from mimika.studio.jobs import MP4_WEIGHT, Job, Jobs, temp_dir
+from mimika.studio.jobs import MP4_WEIGHT, Job, Jobs
 from mimika.studio.routers._deps import state_of
 from mimika.studio.routers.projects import _validate
 from mimika.studio.schemas import ExportRequest
-from mimika.studio.state import StudioState, gltf_bytes
+from mimika.studio.state import StudioState
+from mimika.web.glb import gltf_bytes, temp_dir
 
 router = APIRouter(prefix="/api/export", tags=["export"])
 #: functions a newsreader module may offer, tried in order: f(project, path)

@@ -29,6 +29,7 @@ from starlette.concurrency import run_in_threadpool
 
 from mimika import limits
 from mimika.errors import DataError, MimikaError
+from mimika.newsreader.article import article_sentences
 from mimika.studio import speaking
 from mimika.studio.messages import plain
 from mimika.studio.routers._deps import state_of
@@ -115,7 +116,7 @@ async def _speak(send: _Sender, st: StudioState, req: SpeakRequest, sid: Any,
 
     try:
         mix = await run_in_threadpool(speaking.mix_of, req.project, st, blend=req.blend)
-        sents = speaking.sentences(req.text, req.lang)
+        sents = article_sentences(req.text, req.lang)
     except MimikaError as e:
         await send.json({"type": "error", "id": sid, "message": plain(str(e))})
         return

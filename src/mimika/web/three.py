@@ -1,4 +1,6 @@
-"""The page's three.js modules: copied from npm's ``three`` package into ``static/vendor``."""
+"""The three.js modules the studio's and ``mimika serve``'s pages import: copied from npm's
+``three`` package (pinned in ``npm/package-lock.json``) into ``vendor/three``, served at
+:data:`URL`."""
 
 from __future__ import annotations
 
@@ -13,8 +15,10 @@ from mimika.errors import DataError
 log = logging.getLogger(__name__)
 
 HERE = Path(__file__).parent
-WEB = HERE / "web"
-VENDOR = HERE / "static" / "vendor" / "three"
+NPM = HERE / "npm"
+VENDOR = HERE / "vendor" / "three"
+#: where both servers mount :data:`VENDOR` (the pages' import maps point here)
+URL = "/vendor/three"
 #: files the page imports (source path in the npm package → path under ``VENDOR``)
 FILES = {
     "build/three.module.js": "three.module.js",
@@ -30,26 +34,26 @@ def vendor_ready() -> bool:
 
 
 def ensure_vendor(*, install: bool = True) -> Path:
-    """Make sure ``static/vendor/three`` holds the modules; runs ``npm ci`` in ``web/`` if
+    """Make sure ``vendor/three`` holds the modules; runs ``npm ci`` in ``npm/`` if
     ``install`` and the package is not installed yet. Raises :class:`DataError` if impossible."""
     if vendor_ready():
         return VENDOR
-    src = WEB / "node_modules" / "three"
+    src = NPM / "node_modules" / "three"
     if not src.is_dir():
         npm = shutil.which("npm")
         if not (install and npm):
-            raise DataError("the studio needs three.js from npm: run "
+            raise DataError("the studio and serve pages need three.js from npm: run "
                             "'bash scripts/setup-studio.sh' (needs node and npm: "
                             "sudo apt-get install -y nodejs npm)")
-        log.info("studio: npm ci in %s", WEB)
-        r = subprocess.run([npm, "ci", "--no-audit", "--no-fund", "--loglevel=error"], cwd=WEB,
+        log.info("npm ci in %s", NPM)
+        r = subprocess.run([npm, "ci", "--no-audit", "--no-fund", "--loglevel=error"], cwd=NPM,
                            capture_output=True, text=True, timeout=600, check=False)
         if r.returncode != 0 or not src.is_dir():
-            raise DataError(f"npm ci in {WEB} failed: {(r.stderr or r.stdout).strip()[-400:]}")
+            raise DataError(f"npm ci in {NPM} failed: {(r.stderr or r.stdout).strip()[-400:]}")
     for s, d in FILES.items():
         (VENDOR / d).parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(src / s, VENDOR / d)
     version = json.loads((src / "package.json").read_text("utf-8"))["version"]
     (VENDOR / "VERSION").write_text(version + "\n", "utf-8")
-    log.info("studio: three.js %s copied to %s", version, VENDOR)
+    log.info("three.js %s copied to %s", version, VENDOR)
     return VENDOR

@@ -1,8 +1,9 @@
-"""The newsreader's behaviour layers (blink, gaze, head, brows, smile) for studio speech.
+"""Behaviour sentence by sentence, for speech that arrives one sentence at a time (the studio,
+``mimika serve``): the newsreader's layers (blink, gaze, head, brows, smile) of each sentence,
+joined to where the previous one ended.
 
 One adapter, :func:`behaviour_track`, over the library's own function for an utterance's
-behaviour (:func:`mimika.behaviour.speaking.speaking_behaviour`, which the newsreader runs too),
-per spoken sentence.
+behaviour (:func:`mimika.behaviour.speaking.speaking_behaviour`, which the newsreader runs too).
 """
 
 from __future__ import annotations
@@ -14,8 +15,8 @@ import numpy as np
 
 from mimika.tracks import AUTrack
 
-#: the layers the studio offers, in the order of its switches
-LAYERS = ("blink", "gaze", "head", "brows", "smile")
+#: the layers sentence-wise speech offers, in the order of the studio's switches
+SPEECH_LAYERS = ("blink", "gaze", "head", "brows", "smile")
 #: seconds over which a sentence's behaviour starts from where the previous one ended
 JOIN_S = 0.3
 
@@ -32,7 +33,7 @@ def behaviour_track(utterance: Any, *, fps: float, layers: Iterable[str], seed: 
     from mimika.behaviour import behaviour_params
     from mimika.behaviour.speaking import speaking_behaviour
 
-    names = [x for x in LAYERS if x in set(layers)]
+    names = [x for x in SPEECH_LAYERS if x in set(layers)]
     if not names:
         return None
     track, _ = speaking_behaviour(utterance, fps=fps, layers=names, mood=mood,
