@@ -91,6 +91,10 @@ def test_macro_weights_are_products_that_sum_to_one_per_combination():
     ("skin: pink\n", "skin must be a colour '#rrggbb'"),
     ("hat: fedora\n", "unknown key 'hat'"),
     ("extends: nobody\n", "extends 'nobody': no such preset"),
+    ("modifiers: {eyebrow-trans-down-up: 0.5}\n",
+     "unknown modifier 'eyebrow-trans-down-up'; did you mean eyebrows-trans-down-up?"),
+    ("modifiers: {head-oval: -0.5}\n", "modifiers.head-oval=-0.5 is out of range [0, 1]"),
+    ("modifiers: [mouth-angles-down-up]\n", "modifiers must map modifier names to values"),
 ])
 def test_character_file_errors_are_one_line_with_exit_2(tmp_path, body, message):
     f = tmp_path / "me.yaml"
@@ -112,6 +116,72 @@ def test_character_file_extends_a_preset(tmp_path):
     base = load_character_spec("daniel")
     assert c.phenotype["age"] == 80 and c.phenotype["gender"] == base.phenotype["gender"]
     assert c.hair is None and c.clothes == base.clothes and c.name == "older"
+
+
+@needs_makehuman
+def test_face_modifiers_move_their_region_and_what_sits_on_it():
+    """MakeHuman's face sliders: the mouth corners up by 5 mm and nothing else; the brows'
+    slant moves the brow skin's outer ends and the brow hairs fitted to it, not the eyes."""
+    from mimika.face.makehuman.base import first_copies, landmark_ids
+    from mimika.face.makehuman.build import SCALE as CM
+    from mimika.face.makehuman.build import Outfit, build
+
+    outfit = Outfit(None, "eyebrow010", None, ())
+
+    def shapes(mods=None):
+        b = build({}, outfit, mods)
+        skin = b.pieces[0]
+        brows = next(p for p in b.pieces if p.name == "brows")
+        return skin.vertices[first_copies(skin.weld, landmark_ids())] * CM, brows.vertices * CM
+
+    lm0, br0 = shapes()
+    lm, _ = shapes({"mouth-angles-down-up": 1.0})
+    d = lm - lm0
+    assert (d[[48, 54], 1] > 0.3).all() and (d[[48, 54], 1] < 0.8).all()  # corners, cm
+    others = np.r_[0:48, 50:53, 56:59, 62, 65:68]  # all but the lips near the corners
+    assert np.abs(d[others]).max() < 0.02
+    lm, br = shapes({"eyebrows-angle-down-up": 1.0})
+    d = lm - lm0
+    assert (np.abs(d[[17, 26], 1]) > 0.4).all()  # the brows' outer ends
+    assert np.abs(br - br0)[:, 1].mean() > 0.1  # the brow hairs go with the skin
+    assert np.abs(d[36:48]).max() < 0.02  # the eyes stay
+
+
+@needs_makehuman
+def test_a_sided_face_modifier_moves_one_side():
+    from mimika.face.makehuman.base import load_base
+    from mimika.face.makehuman.targets import apply_modifiers
+
+    v = load_base().vertices
+    moved = np.linalg.norm(apply_modifiers(v, {"l-eye-scale-decr-incr": 1.0}) - v, axis=1) > 0
+    assert moved.any() and (v[moved, 0] > 0).all()  # the character's left is +x
+    both = np.linalg.norm(apply_modifiers(v, {"eye-scale-decr-incr": -1.0}) - v, axis=1) > 0
+    assert (v[both, 0] > 0).any() and (v[both, 0] < 0).any()
+
+
+@needs_makehuman
+def test_characters_lists_the_face_modifiers_a_file_may_set(capsys):
+    from mimika.cli import main
+    from mimika.face.makehuman.targets import modifiers
+
+    assert main(["characters", "--modifiers"]) == 0
+    out = capsys.readouterr().out
+    assert "mouth-angles-down-up" in out and "head-oval (0…1)" in out
+    # every listed name is one a character file accepts
+    listed = [n.split(" (")[0] for line in out.splitlines()[:10]
+              for n in line.split(None, 1)[1].split(", ")]
+    assert len(listed) > 100 and set(listed) <= set(modifiers())
+
+
+def test_face_modifiers_are_part_of_the_geometry_key(tmp_path):
+    from mimika.face.makehuman.character_file import load_character_spec
+
+    (tmp_path / "a.yaml").write_text("extends: mei\nmodifiers: {mouth-angles-down-up: 0.2}\n")
+    (tmp_path / "b.yaml").write_text("extends: mei\nmodifiers: {mouth-angles-down-up: 0}\n")
+    a, b = (load_character_spec(str(tmp_path / n)) for n in ("a.yaml", "b.yaml"))
+    assert a.modifiers == {"mouth-angles-down-up": 0.2} and b.modifiers == {}
+    assert a.geometry_key() != b.geometry_key()
+    assert b.geometry_key() == load_character_spec("mei").geometry_key()
 
 
 def test_two_characters_differing_only_in_name_are_loaded_apart(tmp_path):

@@ -22,6 +22,18 @@ def cmd_characters(args: argparse.Namespace) -> int:
         for kind in ("hair", "eyebrows", "eyelashes", "clothes"):
             print(f"{kind:<10} {', '.join(assets(kind))}")
         return 0
+    if args.modifiers:
+        from mimika.face.makehuman.targets import modifiers
+
+        groups: dict[str, list[str]] = {}
+        for name, m in modifiers().items():
+            if not name.startswith(("l-", "r-")):
+                groups.setdefault(m.group, []).append(name + (" (0…1)" if not m.negative else ""))
+        for group, names in groups.items():
+            print(f"{group:<9} {', '.join(names)}")
+        print("\nValues -1 … 1 (a shape marked 0…1 blends in from 0) under 'modifiers:' in a "
+              "character file; l-NAME / r-NAME move one side (the character's left / right).")
+        return 0
     if args.show:
         from importlib import resources
 
@@ -71,5 +83,7 @@ def register(sub) -> None:
     p.add_argument("--show", metavar="NAME", help="print a preset's (or file's) character file")
     p.add_argument("--assets", action="store_true",
                    help="list the hair, brows, lashes and clothes a character file may name")
+    p.add_argument("--modifiers", action="store_true",
+                   help="list the face modifiers (MakeHuman's sliders) a character file may set")
     p.add_argument("--sheet", metavar="PNG", help="write a contact sheet of the characters")
     p.set_defaults(func=cmd_characters)

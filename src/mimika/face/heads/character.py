@@ -195,7 +195,8 @@ def built_character(character: Character) -> Built:
     if built is None:
         built = _with_ict_style(build(character.phenotype_values(),
                                       Outfit(character.hair, character.eyebrows,
-                                             character.eyelashes, character.clothes)))
+                                             character.eyelashes, character.clothes),
+                                      character.modifiers))
         try:
             cache.save(path, built)
         except OSError as e:

@@ -28,7 +28,12 @@ from mimika.face.eyeball import eyeball_object
 from mimika.face.makehuman.base import BaseMesh, load_base
 from mimika.face.makehuman.proxy import Proxy, read_mhclo
 from mimika.face.makehuman.skeleton import Skeleton, build_skeleton, rest_pose, skin
-from mimika.face.makehuman.targets import apply_macros, faceunit_names, read_faceunit
+from mimika.face.makehuman.targets import (
+    apply_macros,
+    apply_modifiers,
+    faceunit_names,
+    read_faceunit,
+)
 
 log = logging.getLogger(__name__)
 
@@ -299,10 +304,12 @@ def _helper_piece(base: BaseMesh, verts: np.ndarray, group: str, name: str, cate
                  meta={"offsets": np.zeros((len(src), 3))})
 
 
-def build(phenotype: dict[str, float], outfit: Outfit) -> Built:
-    """The character for ``phenotype`` values (see :mod:`.targets`) wearing ``outfit``."""
+def build(phenotype: dict[str, float], outfit: Outfit,
+          modifiers: dict[str, float] | None = None) -> Built:
+    """The character for ``phenotype`` values and face ``modifiers`` (see :mod:`.targets`)
+    wearing ``outfit``."""
     base = load_base()
-    verts = apply_macros(base.vertices, phenotype)
+    verts = apply_modifiers(apply_macros(base.vertices, phenotype), modifiers or {})
     skel = build_skeleton(base, verts)
     n = len(verts)
     proxies: list[tuple[str, str, str, Proxy]] = []

@@ -11,6 +11,8 @@ phenotype:
   height: 0.55
   proportions: 0.6
   origin: {african: 0.9, caucasian: 0.1}   # mix, any scale (normalised)
+modifiers:             # MakeHuman's face sliders, -1 … 1 (mimika characters --modifiers)
+  eyebrows-trans-down-up: 0.2
 skin: "#6e4633"        # albedo, sRGB (default: from origin)
 eyes: "#3b2314"
 hair: {style: bob02, color: "#17110d"}     # or hair: none
@@ -37,12 +39,12 @@ from typing import Any
 
 from mimika.errors import DataError
 from mimika.face.makehuman.build import ASSETS
-from mimika.face.makehuman.targets import RACES
+from mimika.face.makehuman.targets import RACES, modifiers
 
 #: age in years ↔ MakeHuman's age value (1 y → 0, 11 y → 0.1875, 25 y → 0.5, 90 y → 1)
 _AGE_YEARS = ((1.0, 0.0), (11.0, 0.1875), (25.0, 0.5), (90.0, 1.0))
-_KEYS = {"name", "description", "extends", "phenotype", "skin", "eyes", "hair", "eyebrows",
-         "eyelashes", "clothes"}
+_KEYS = {"name", "description", "extends", "phenotype", "modifiers", "skin", "eyes", "hair",
+         "eyebrows", "eyelashes", "clothes"}
 _PHENO = {"gender", "age", "muscle", "weight", "height", "proportions", "origin"}
 _HEX = re.compile(r"^#[0-9a-fA-F]{6}$")
 #: default skin albedo (sRGB) per origin, blended by the origin mix
@@ -77,6 +79,8 @@ class Character:
     name: str
     description: str = ""
     phenotype: dict[str, Any] = field(default_factory=dict)
+    #: face modifier values by name (:func:`mimika.face.makehuman.targets.modifiers`)
+    modifiers: dict[str, float] = field(default_factory=dict)
     skin: str = "#dfae94"
     eyes: str = "#5b3a24"
     hair: str | None = "short02"
@@ -104,8 +108,11 @@ class Character:
                 "clothes": list(self.clothes)}
 
     def geometry_key(self) -> str:
-        """A hash of everything that shapes the geometry (phenotype and outfit)."""
-        d = {"p": sorted(self.phenotype_values().items()), "o": self.outfit_dict()}
+        """A hash of everything that shapes the geometry (phenotype, modifiers and outfit)."""
+        d: dict[str, Any] = {"p": sorted(self.phenotype_values().items()),
+                             "o": self.outfit_dict()}
+        if self.modifiers:
+            d["m"] = sorted(self.modifiers.items())
         return hashlib.sha1(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
     def key(self) -> str:
@@ -159,6 +166,26 @@ def _color(where: str, key: str, v: Any) -> str:
     if not isinstance(v, str) or not _HEX.match(v):
         raise DataError(f"{where}: {key} must be a colour '#rrggbb', got {v!r}")
     return v.lower()
+
+
+def _modifiers(where: str, v: Any) -> dict[str, float]:
+    if v is None:
+        return {}
+    if not isinstance(v, dict):
+        raise DataError(f"{where}: modifiers must map modifier names to values, e.g. "
+                        "'eyebrows-trans-down-up: 0.2' (mimika characters --modifiers)")
+    have = modifiers()
+    out: dict[str, float] = {}
+    for name, value in v.items():
+        if name not in have:
+            import difflib
+
+            near = difflib.get_close_matches(str(name), list(have), n=1)
+            hint = f"did you mean {near[0]}? " if near else ""
+            raise DataError(f"{where}: unknown modifier {name!r}; {hint}(mimika characters "
+                            "--modifiers lists them)")
+        out[name] = _num(where, f"modifiers.{name}", value, have[name].low, 1.0)
+    return {k: x for k, x in sorted(out.items()) if x}
 
 
 def _merge(base: dict, over: dict) -> dict:
@@ -225,6 +252,7 @@ def character_from_dict(doc: dict, where: str, default_name: str = "character") 
     desc = doc.get("description", "")
     return Character(
         name=name, description=str(desc), phenotype=pheno,
+        modifiers=_modifiers(where, doc.get("modifiers")),
         skin=_color(where, "skin", doc.get("skin", _mix_hex(mix, SKIN_BY_ORIGIN))),
         eyes=_color(where, "eyes", doc.get("eyes", "#5b3a24")),
         hair=_asset(where, "hair", "hair", hair), hair_color=hair_color,

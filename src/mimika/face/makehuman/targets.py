@@ -5,7 +5,9 @@ mesh, in its units (decimetres). The macro targets shape the whole body from a f
 values (gender, age, muscle, weight, height, proportions, race): ``macrodetails/macro.json``
 gives, per variable, piecewise-linear weights over named levels; a combination's target is
 named by its levels joined with ``-`` and weighted by the product of their weights (exactly
-MakeHuman's macro modifier).
+MakeHuman's macro modifier). The face *modifiers* are MakeHuman's modelling sliders for the
+face and head (``eyebrows-trans-down-up``, ``mouth-angles-down-up`` …, listed in
+``mpfb2/targets/target.json``): a value in [-1, 1] adds its negative or positive target.
 """
 
 from __future__ import annotations
@@ -35,6 +37,26 @@ _COMBINATIONS = {
     "genderagemuscleweightheight": ("height/", ""),
     "genderagemuscleweightproportions": ("proportions/", ""),
 }
+
+
+#: MakeHuman's modelling groups a character file may change: the face and head
+FACE_GROUPS = ("cheek", "chin", "ears", "eyebrows", "eyes", "forehead", "head", "mouth", "neck",
+               "nose")
+
+
+@dataclass(frozen=True)
+class Modifier:
+    """One of MakeHuman's modelling sliders: a value below 0 adds the ``negative`` targets by
+    its size, above 0 the ``positive`` ones (file stems under ``mpfb2/targets/<group>``); a
+    slider without ``negative`` takes values in [0, 1] only."""
+
+    group: str
+    negative: tuple[str, ...]
+    positive: tuple[str, ...]
+
+    @property
+    def low(self) -> float:
+        return -1.0 if self.negative else 0.0
 
 
 @dataclass(frozen=True)
@@ -119,6 +141,45 @@ def apply_macros(base: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
         if t.indices.size and t.indices.max() >= len(out):
             raise DataError(f"target {rel} indexes past the base mesh")
         out[t.indices] += np.float32(w) * t.deltas
+    return out
+
+
+@functools.cache
+def modifiers() -> dict[str, Modifier]:
+    """The face modifiers by name. A sided slider (the eyes, cheeks, ears …) moves both sides;
+    ``l-NAME`` and ``r-NAME`` move the character's left or right side alone."""
+    doc = json.loads(data_file("mpfb2/targets/target.json").read_text("utf-8"))
+    out: dict[str, Modifier] = {}
+    for group in FACE_GROUPS:
+        for c in doc[group]["categories"]:
+            o = c.get("opposites")
+            if not o:
+                if len(c["targets"]) == 1:  # a shape blended in from 0 (head-oval …)
+                    out[c["name"]] = Modifier(group, (), (c["targets"][0],))
+                continue
+            if not c.get("has_left_and_right"):
+                out[c["name"]] = Modifier(group, (o["negative-unsided"],),
+                                          (o["positive-unsided"],))
+                continue
+            sides = {"l": "left", "r": "right"}
+            for k, side in sides.items():
+                out[f"{k}-{c['name']}"] = Modifier(group, (o[f"negative-{side}"],),
+                                                   (o[f"positive-{side}"],))
+            out[c["name"]] = Modifier(group, tuple(o[f"negative-{s}"] for s in sides.values()),
+                                      tuple(o[f"positive-{s}"] for s in sides.values()))
+    return out
+
+
+def apply_modifiers(base: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+    """``base`` (N, 3) changed by face modifier ``values`` (name → value, :func:`modifiers`)."""
+    out = np.array(base, np.float32, copy=True)
+    for name, v in values.items():
+        m = modifiers()[name]
+        for stem in (m.positive if v > 0 else m.negative) if v else ():
+            t = read_target(data_dir() / "mpfb2" / "targets" / m.group / f"{stem}.target.gz")
+            if t.indices.size and t.indices.max() >= len(out):
+                raise DataError(f"target {m.group}/{stem} indexes past the base mesh")
+            out[t.indices] += np.float32(abs(v)) * t.deltas
     return out
 
 
