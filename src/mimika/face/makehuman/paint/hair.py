@@ -30,6 +30,8 @@ from mimika.face.makehuman.paint.tables import table
 CARD_CM2 = 250.0
 #: how long a strand shows on the surface before it dives under others (cm, random around it)
 SEGMENT_CM = 0.5
+#: how many tapered locks end together at a fringe or hairline (a clump)
+CLUMP_LOCKS = 6.0
 
 
 def styles() -> dict:
@@ -68,7 +70,10 @@ def _locks(table: _Table, x: np.ndarray, grown: np.ndarray, soft: np.ndarray
     (0 at the tip … 1 at full width) rises; ``soft``: a texel's width in those units (the
     edges are anti-aliased over it)."""
     r, f = table.strands(x)
-    u = np.clip(grown - 0.6 * r, 0.0, 1.0) / 0.4  # each lock ends at its own length
+    # each lock ends at its own length, its neighbours' alike: clumps of locks about
+    # :data:`CLUMP_LOCKS` wide taper together (independent lengths read as a saw blade)
+    r = 0.4 * r + 0.6 * table(x / CLUMP_LOCKS + 1000.5)
+    u = np.clip(grown - 0.6 * r, 0.0, 1.0) / 0.4
     half = 0.5 * np.sqrt(np.clip(u, 0.0, 1.0))
     return smoothstep(0.0, 1.0, (half - np.abs(f - 0.5)) / np.maximum(soft, 0.05) + 0.5)
 
