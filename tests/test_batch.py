@@ -140,6 +140,7 @@ BAD = [
     ("aus: [AU12]\nanimation: {format: avi}\n", "animation.format: unknown clip format 'avi'"),
     ("aus: [AU12]\ndisabled_rules: ['7<8']\n", "disabled_rules[0]: no co-occurrence rule"),
     ("aus: [AU12]\nface_height: 2\n", "spec.yaml:2: face_height: 2 must be ≤ 1"),
+    ("aus: [AU12]\nheads: [nobody/*.yaml]\n", "heads[0]: no head file (.obj, .glb"),
 ]
 
 
@@ -340,6 +341,17 @@ def test_examples_are_valid(tmp_path):
     from mimika.face.heads import DEFAULT_HEAD
 
     assert parse_spec({"aus": [["AU12"]]}).heads == (DEFAULT_HEAD,)
+
+
+def test_a_head_pattern_takes_every_matching_character_file(tmp_path):
+    from mimika.face.makehuman.people import random_people, write_people
+
+    paths = write_people(random_people(3, seed=1), tmp_path / "people")
+    (tmp_path / "people" / "notes.txt").write_text("not a head")
+    spec = parse_spec({"aus": [["AU12"]], "heads": ["people/*.yaml", "builtin"]},
+                      base=tmp_path)
+    assert spec.heads == (*(str(p.resolve()) for p in paths), "builtin")
+    assert len(make_plan(spec).items) == 4
 
 
 def test_identities_name_ict_items_only(tmp_path, monkeypatch):

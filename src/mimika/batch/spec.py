@@ -8,6 +8,7 @@ the file, the line and the key (``spec.yaml:4: intensities[1]: 1.5 is outside [0
 from __future__ import annotations
 
 import difflib
+import glob
 import hashlib
 import inspect
 import json
@@ -256,6 +257,10 @@ def _au_set(c: _Checker, v: Any, path: Path_) -> tuple[tuple[str, float], ...]:
     return tuple((code, w) for code, w, _ in pairs)
 
 
+#: file types a head may be (besides an ICT-FaceKit folder)
+_HEAD_FILES = (".obj", ".glb", ".gltf", ".vrm", ".yaml", ".yml", ".json")
+
+
 def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
     from mimika.face.makehuman.character_file import preset_names
 
@@ -281,8 +286,15 @@ def _heads(c: _Checker, v: Any, base: Path | None) -> tuple[str, ...]:
         path = Path(os.path.expanduser(h))
         if not path.is_absolute() and base is not None:
             path = base / path
-        if path.is_dir() or path.suffix.lower() in (".obj", ".glb", ".gltf", ".vrm", ".yaml",
-                                                     ".yml", ".json"):
+        if glob.has_magic(h):  # people/*.yaml: every head file that matches
+            found = sorted(Path(f) for f in glob.glob(str(path))
+                           if Path(f).suffix.lower() in _HEAD_FILES)
+            if not found:
+                raise c.error(p, f"no head file ({', '.join(_HEAD_FILES)}) matches "
+                                 f"{str(path)!r}")
+            out.extend(str(f.resolve()) for f in found)
+            continue
+        if path.is_dir() or path.suffix.lower() in _HEAD_FILES:
             if not path.exists():
                 raise c.error(p, f"head file {str(path)!r} does not exist")
             out.append(str(path.resolve()))

@@ -22,6 +22,15 @@ def cmd_characters(args: argparse.Namespace) -> int:
         for kind in ("hair", "eyebrows", "eyelashes", "clothes"):
             print(f"{kind:<10} {', '.join(assets(kind))}")
         return 0
+    if args.random is not None:
+        from mimika.face.makehuman.people import random_people, write_people
+
+        paths = write_people(random_people(args.random, args.seed), args.out)
+        for path in paths:
+            print(f"wrote {path}")
+        print(f"\nUse them with --head {paths[0]}, in a batch spec (heads: [{args.out}/*.yaml]) "
+              f"or on a sheet: mimika characters {args.out}/*.yaml --sheet people.png")
+        return 0
     if args.modifiers:
         from mimika.face.makehuman.targets import modifiers
 
@@ -86,4 +95,10 @@ def register(sub) -> None:
     p.add_argument("--modifiers", action="store_true",
                    help="list the face modifiers (MakeHuman's sliders) a character file may set")
     p.add_argument("--sheet", metavar="PNG", help="write a contact sheet of the characters")
+    p.add_argument("--random", type=int, metavar="N",
+                   help="write N random people (sex, age, origin, face, hair, clothes) as "
+                        "character files into --out")
+    p.add_argument("--seed", type=int, default=0, help="random seed of --random (default 0)")
+    p.add_argument("--out", default="people", metavar="DIR",
+                   help="folder for --random's files (default: people)")
     p.set_defaults(func=cmd_characters)
