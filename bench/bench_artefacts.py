@@ -2,7 +2,7 @@
 asset, ages 18–80, every origin mix) at rest, in AU poses, head turns and body moves, checked
 in the newsreader's HD shot (:func:`mimika.render.artefacts.check_frame`).
 
-    python bench/bench_artefacts.py [--only amara,mei] [--sheet docs/img/artefacts.png]
+    python bench/bench_artefacts.py [--only amara,mei] [--random 8] [--sheet docs/img/artefacts.png]
 
 Prints, per character and pose, the offending pixels (visible cloth on triangles that pass
 through cloth or skin; skin seen through clothes or through gaps between hair cards;
@@ -48,9 +48,10 @@ ORIGINS = ({"african": 1.0}, {"asian": 1.0}, {"caucasian": 1.0},
 SIZE = (1280, 720)
 
 
-def cast() -> list:
+def cast(random: int = 0) -> list:
     """The presets, then one generated character per clothes asset: ages, origin mixes,
-    builds and hair styles rotate so every asset and mix appears."""
+    builds and hair styles rotate so every asset and mix appears; then ``random`` random
+    people (:mod:`mimika.face.makehuman.people`, seed 0: faces of their own too)."""
     from mimika.face.makehuman.character_file import (
         assets,
         character_from_dict,
@@ -68,6 +69,9 @@ def cast() -> list:
                              "origin": ORIGINS[k % len(ORIGINS)]},
                "hair": {"style": next(hair), "color": "#3a2a20"}, "clothes": [clothes]}
         out.append(character_from_dict(doc, f"generated {k}"))
+    from mimika.face.makehuman.people import random_people
+
+    out += [character_from_dict(d, d["name"]) for d in random_people(random)] if random else []
     return out
 
 
@@ -94,6 +98,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", help="comma-separated character names")
     ap.add_argument("--sheet", type=Path, help="write the contact sheet here (PNG)")
+    ap.add_argument("--random", type=int, default=0, metavar="N",
+                    help="also N random people (mimika characters --random, seed 0)")
     a = ap.parse_args()
     from mimika.newsreader.pipeline import news_camera
     from mimika.render import Renderer
@@ -108,7 +114,7 @@ def main() -> None:
     keys = ("cloth_cross_px", "skin_through_px", "hair_gap_px", "zfight_px",
             "cloth_cloth_tris", "skin_cloth_tris", "stretched_tris", "flipped_tris")
     print(f"{'character':<22} {'pose':<11} " + " ".join(f"{k:>16}" for k in keys))
-    for ch in cast():
+    for ch in cast(a.random):
         if only and ch.name not in only:
             continue
         t0 = time.perf_counter()
