@@ -150,7 +150,8 @@ def test_foreign_host_and_missing_token_are_refused():
 
     app = create_app(head="builtin", host="0.0.0.0", token="s3cret")
     with TestClient(app, base_url="http://evil.attacker.test") as c:
-        assert c.get("/health").status_code == 403
+        r = c.get("/health")
+        assert r.status_code == 403 and "mimika serve --allow-host" in r.text
     with TestClient(app, base_url="http://127.0.0.1") as c:
         assert c.get("/health").status_code == 401
         assert c.get("/health?token=s3cret").status_code == 200

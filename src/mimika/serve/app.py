@@ -87,7 +87,8 @@ def create_app(*, head: str | None = None, host: str = "127.0.0.1",
     ensure_vendor()
     app.mount(URL, StaticFiles(directory=VENDOR), name="three")
     app.add_middleware(TokenGuard, token=token)
-    app.add_middleware(HostGuard, policy=HostPolicy(host, allowed_hosts))  # outermost
+    app.add_middleware(HostGuard, policy=HostPolicy(host, allowed_hosts),  # outermost
+                       command="serve")
     if warm_up:
         threading.Thread(target=_warm, args=(state,), name="serve-warm-up", daemon=True).start()
 

@@ -1,10 +1,10 @@
-"""Host validation for the studio: a defence against DNS rebinding.
+"""Host validation for the studio and ``mimika serve``: a defence against DNS rebinding.
 
-A page on ``attacker.test`` whose DNS name is re-pointed at 127.0.0.1 reaches the studio with
+A page on ``attacker.test`` whose DNS name is re-pointed at 127.0.0.1 reaches the server with
 ``Host: attacker.test:PORT`` and a matching ``Origin`` — same-origin as far as the browser
-knows. The studio therefore answers only Host names it serves: the address it binds,
+knows. The server therefore answers only Host names it serves: the address it binds,
 ``localhost``, any IP literal when it binds every interface (an IP cannot be rebound), and
-the names the user allows (``mimika studio --allow-host NAME``,
+the names the user allows (``--allow-host NAME``,
 ``MIMIKA_STUDIO_ALLOWED_HOSTS=a.example,*.lan``). Anything else gets 403, on HTTP and
 WebSocket alike.
 """
@@ -69,7 +69,7 @@ def _is_ip(name: str) -> bool:
 
 
 class HostPolicy:
-    """Which Host names a studio bound to ``bind`` answers (see the module docstring)."""
+    """Which Host names a server bound to ``bind`` answers (see the module docstring)."""
 
     def __init__(self, bind: str = "127.0.0.1", allowed: Iterable[str] = ()):
         self.bind = (host_name(bind) or bind) if bind not in WILDCARDS else bind
@@ -99,9 +99,10 @@ class HostPolicy:
 class HostGuard:
     """ASGI middleware: 403 (HTTP) or a refused handshake (WebSocket) for unknown Hosts."""
 
-    def __init__(self, app: Any, policy: HostPolicy):
+    def __init__(self, app: Any, policy: HostPolicy, command: str = "studio"):
         self.app = app
         self.policy = policy
+        self.command = command  #: the ``mimika`` command serving (named in the refusal)
 
     async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
         if scope["type"] in ("http", "websocket"):
@@ -109,9 +110,10 @@ class HostGuard:
                          if k == b"host"), None)
             if not self.policy.allows(host):
                 where = self.policy.bind if not self.policy.any_ip else "its address"
-                await refuse(scope, send, 403, f"host {host!r} is not served here; open the "
-                                               f"studio at {where} or allow the name with "
-                                               "mimika studio --allow-host")
+                await refuse(scope, send, 403, f"host {host!r} is not served here; open "
+                                               f"mimika {self.command} at {where} or allow "
+                                               f"the name with mimika {self.command} "
+                                               "--allow-host")
                 return
         await self.app(scope, receive, send)
 
