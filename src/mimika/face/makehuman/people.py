@@ -53,7 +53,7 @@ def random_person(rng: np.random.Generator, name: str) -> dict[str, Any]:
     mods[shape] = round(float(rng.uniform(0.0, t["head_shape_max"])), 2)
     hair = t["hair"]
     grey_p = np.clip((age - hair["grey_from"]) / (85.0 - hair["grey_from"]), 0.0, 1.0)
-    colour = hair["grey"] if rng.random() < grey_p else _pick(rng, hair["colors"])
+    colour = hair["grey"] if rng.random() < grey_p else _pick(rng, hair["colors"][main])
     # coily hair grows on people of African origin (the other styles on anyone)
     styles = [s for s in hair["styles"][sex] if s not in hair["coily"] or "african" in origin]
     return {
