@@ -34,7 +34,7 @@ ENV_ENGINE = "MIMIKA_TTS"  #: default engine for every command (auto | espeak | 
 SENTENCE_PAUSE = 0.3  #: seconds of silence at least between two spoken sentences
 
 @functools.cache
-def _sentence_abbreviations() -> tuple[frozenset[str], frozenset[str]]:
+def sentence_abbreviations() -> tuple[frozenset[str], frozenset[str]]:
     """Abbreviations after which a '.' ends no sentence, in any language, and those of them
     that may end one before a capitalised word (``data/sentence_ends.json``)."""
     path = resources.files("mimika.speech").joinpath("data/sentence_ends.json")
@@ -55,7 +55,7 @@ def split_sentences(text: str, lang: str = "en") -> list[tuple[str, int]]:
     """
     from mimika.speech.normalize import no_break_after
 
-    abbreviations, may_end = _sentence_abbreviations()
+    abbreviations, may_end = sentence_abbreviations()
     out: list[tuple[str, int]] = []
     for para in re.finditer(r"\S(?:.*?\S)?(?=\s*\n\s*\n|\s*$)", text, flags=re.S):
         start = para.start()

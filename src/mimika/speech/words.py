@@ -45,7 +45,7 @@ class Token:
 def _trim(tok: str, start: int) -> tuple[str, int]:
     """Strip quotes, brackets and trailing punctuation; keep the dot of abbreviations
     (``Dr.``, ``z.B.``, ``p.m.``)."""
-    from mimika.speech.tts import _sentence_abbreviations
+    from mimika.speech.tts import sentence_abbreviations
 
     i, j = 0, len(tok)
     while i < j and tok[i] in _LEAD:
@@ -55,7 +55,7 @@ def _trim(tok: str, start: int) -> tuple[str, int]:
     core = tok[i:j]
     while core.endswith("."):
         body = core[:-1]
-        if body.lower() in _sentence_abbreviations()[0] or ("." in body.strip(".")
+        if body.lower() in sentence_abbreviations()[0] or ("." in body.strip(".")
                                         and not any(c.isdigit() for c in body)):
             break
         core = body.rstrip(_TRAIL)

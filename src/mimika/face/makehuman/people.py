@@ -33,6 +33,7 @@ def random_person(rng: np.random.Generator, name: str) -> dict[str, Any]:
     from mimika.face.makehuman.character_file import assets
 
     t = _table()
+    brows, lashes = assets("eyebrows"), assets("eyelashes")
     male = bool(rng.random() < 0.5)
     sex = "male" if male else "female"
     age = float(rng.uniform(*t["age"]))
@@ -63,8 +64,8 @@ def random_person(rng: np.random.Generator, name: str) -> dict[str, Any]:
         "modifiers": {k: v for k, v in mods.items() if v},
         "eyes": _pick(rng, t["eyes"][main]),
         "hair": {"style": styles[rng.integers(len(styles))], "color": colour},
-        "eyebrows": assets("eyebrows")[rng.integers(len(assets("eyebrows")))],
-        "eyelashes": assets("eyelashes")[rng.integers(len(assets("eyelashes")))],
+        "eyebrows": brows[rng.integers(len(brows))],
+        "eyelashes": lashes[rng.integers(len(lashes))],
         "clothes": [t["clothes"][sex][rng.integers(len(t["clothes"][sex]))]],
     }
 
