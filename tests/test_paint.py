@@ -311,6 +311,29 @@ def test_scalp_under_the_hair_takes_the_hairs_colour(daniel):
 
 
 @needs_anny
+def test_white_hair_paints_no_pale_smears_on_dark_skin(daniel):
+    """White hair over dark skin: the scalp under it is shaded skin, not lighter than the
+    skin's own colour, and white brows are sparser and more translucent than the same brows
+    in black (dense white hairs read as pale paint)."""
+    from mimika.face.makehuman.paint.skin import _scalp_cover, paint_head, skin_layout
+
+    c, pieces = daniel
+    old = replace(c, skin="#5a3a2a", hair_color="#e4e0da",
+                  phenotype={**c.phenotype, "age": 78})
+    sk = pieces["skin"]
+    _, uvs = skin_layout(sk)
+    col = _texel(paint_head(sk, old), uvs)[:, :3]
+    cover = _scalp_cover(sk, old, sk.vertices.astype(float) * 10.0)
+    skin = np.array([int(old.skin[i:i + 2], 16) for i in (1, 3, 5)], float)
+    assert col[cover > 0.9].mean() < 0.9 * skin.mean()  # shaded, not pale
+    white = strokes.paint_strokes(pieces["brows"], old, "brow")[..., 3].astype(float)
+    black = strokes.paint_strokes(pieces["brows"], replace(old, hair_color="#15100c"),
+                                  "brow")[..., 3].astype(float)
+    assert white.sum() < 0.7 * black.sum()
+    assert (white > 128).sum() < 0.7 * (black > 128).sum()
+
+
+@needs_anny
 def test_lashes_are_fine_strokes_not_bands(daniel):
     c, pieces = daniel
     lashes = pieces["lashes"]

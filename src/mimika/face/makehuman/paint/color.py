@@ -29,6 +29,13 @@ def luminance(c: np.ndarray) -> np.ndarray:
     return np.asarray(c, np.float32) @ np.array([0.2126, 0.7152, 0.0722], np.float32)
 
 
+def pale(hair: np.ndarray) -> float:
+    """How light a hair colour (linear RGB) is: 0 for black and browns, 1 from dark blond
+    and grey up. Light hairs are translucent and fine ones vanish against skin."""
+    x = np.clip((float(luminance(hair)) - 0.04) / 0.31, 0.0, 1.0)
+    return float(x * x * (3.0 - 2.0 * x))
+
+
 def tint(c: np.ndarray, w: np.ndarray, factor) -> np.ndarray:
     """Multiply linear colours (T, 3) by ``factor`` (3,) to the power ``w`` (T,): a tint of
     strength ``w`` (0 none, 1 full, fractional and negative values allowed)."""

@@ -344,15 +344,18 @@ def _paint_head(at, pos, uv0, cav, cover, margin, lm, on_lips, base, hair, ph, s
     c = color.mix(c, np.array([0.16, 0.035, 0.03]) * (0.4 + 0.6 * light), mouth)
 
     # the lash line: the lid margins darker (lash roots), a little redder just inside
+    # (never lighter than the skin in shade: grey and white hair painted pale smears)
     rim = np.exp(-(v["margin"] / 0.09) ** 2)
-    c = color.mix(c, c * 0.45 + 0.2 * hair, 0.55 * rim)
+    c = color.mix(c, np.minimum(c * 0.45 + 0.2 * hair, c * 0.6), 0.55 * rim)
 
-    # brows: skin under them a little darker (hair roots); scalp tinted by the hair
-    c = color.mix(c, c * 0.55 + 0.45 * hair, 0.45 * v["brows"])
-    # the scalp under hair: as dark as the hair in its own shade, so skin between strand
-    # tips and cards reads as hair, not as light streaks
+    # brows: skin under them a little darker (hair roots); the scalp under hair as dark as
+    # the hair in its own shade, so skin between strand tips and cards reads as hair, not as
+    # light streaks — under light hair, whose fine hairs vanish, the skin in shade
+    pale = color.pale(hair)
+    roots = (1 - pale) * (c * 0.55 + 0.45 * hair) + pale * c * 0.8
+    c = color.mix(c, roots, 0.45 * v["brows"])
     scalp = v["cover"]
-    c = color.mix(c, 0.1 * c + 0.5 * hair, scalp)
+    c = color.mix(c, (1 - pale) * (0.1 * c + 0.5 * hair) + pale * 0.6 * c, scalp)
 
     # beard shadow: stubble dots over a bluish shadow, strength by sex and age
     g_beard = ph["male"] * (0.55 + 0.45 * smoothstep(18.0, 45.0, np.float32(ph["age"])))

@@ -19,7 +19,7 @@ from mimika.face.makehuman.build import SCALE as CM
 from mimika.face.makehuman.build import Piece
 from mimika.face.makehuman.character_file import Character
 from mimika.face.makehuman.paint import color
-from mimika.face.makehuman.paint.noise import seed_of
+from mimika.face.makehuman.paint.noise import seed_of, smoothstep
 from mimika.face.makehuman.paint.raster import rasterize
 from mimika.face.makehuman.paint.regions import uv_islands
 from mimika.face.makehuman.paint.surface import boundary_edges
@@ -296,6 +296,13 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
     asset = character.eyebrows if kind == "brow" else character.eyelashes
     st = settings().get(asset or "", settings()["eyebrow001" if kind == "brow"
                                                  else "eyelashes01"])
+    hair = color.hex_linear(character.hair_color)
+    pale = color.pale(hair)
+    if kind == "brow":  # brows thin with age; grey and white hairs are translucent and
+        # their fine base does not show: as dense as dark ones, they read as pale paint
+        age = float(character.phenotype.get("age", 25.0))
+        st = {**st, "base": st["base"] * (1.0 - 0.85 * pale),
+              "count": st["count"] * (1.0 - 0.35 * float(smoothstep(45.0, 80.0, age)))}
     tris = np.concatenate(list(piece.parts.values()))
     uv = piece.uvs
     pos = piece.vertices.astype(np.float64) * CM
@@ -330,7 +337,6 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
         ts = at.at(vst)[sel]
         alpha[sel] = _lookup(a, ts[:, 0], ts[:, 1])
         tone[sel] = _lookup(tn, ts[:, 0], ts[:, 1])
-    hair = color.hex_linear(character.hair_color)
     if kind == "lash":
         base = 0.2 * hair + 0.8 * np.array([0.006, 0.005, 0.004], np.float32)
         base = base * st["tone"] / 0.3
@@ -339,4 +345,5 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
     c = base[None, :] * tone[:, None]
     # hairs that catch the light show even in black brows
     c = c + np.float32(0.03) * np.clip(tone - 1.0, 0, None)[:, None]
-    return at.image(color.rgba8(c, np.clip(alpha * 1.15, 0, 1)))
+    opacity = 1.15 * (1.0 - 0.4 * pale) if kind == "brow" else 1.15
+    return at.image(color.rgba8(c, np.clip(alpha * opacity, 0, 1)))
