@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import mimika
+from mimika import normals
 from mimika.errors import ParameterError
 from mimika.facs import AU_CATALOGUE
 from mimika.io.atomic import atomic_write
@@ -433,6 +434,8 @@ def _object_attributes(b: _Builder, o: Any, uvs: bool, extra: Attributes | None 
     origin = np.asarray(o.pivot, float) if eye else np.zeros(3)
     v = ((o.vertices - origin) * SCALE).astype(np.float32)
     nrm = _normals(v, o.faces.astype(np.int64))
+    if normals.is_hair(o) and len(o.faces):  # shaded as the renderer shades it
+        nrm = normals.smooth(nrm, normals.smoothing(o.vertices, nrm))
     attrs = {"POSITION": b.add(v, "VEC3", _FLOAT, target=_ARRAY, minmax=True),
              "NORMAL": b.add(nrm, "VEC3", _FLOAT, target=_ARRAY)}
     if uvs:

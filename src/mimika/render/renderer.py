@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from mimika import normals
 from mimika.errors import ParameterError, RenderError
 from mimika.face.head import Head, MeshObject, Part
 from mimika.render.camera import FILL, Camera, check_view, frame_head
@@ -259,6 +260,9 @@ class _GpuObject:
         self._vaos: dict[int, Any] = {id(prog): self.vao}
         self.rest = obj.vertices
         self.holds_rest = False
+        #: hair: the smoothing of its normals (:func:`mimika.normals.smoothing`), else None
+        self.smooth = normals.smoothing(obj.vertices, self._normals(obj.vertices)) \
+            if normals.is_hair(obj) and len(faces) else None
 
     def vao_for(self, prog: Any) -> Any:
         """This object's vertex array for ``prog`` (a variant of the mesh program)."""
@@ -277,14 +281,17 @@ class _GpuObject:
                 return
             positions = self.rest
         self.interleaved[:, :3] = positions
-        if self.weld_inv is None:
-            self.interleaved[:, 3:6] = vertex_normals(positions, self.corners, self.incidence)
-        else:
-            n = vertex_normals(np.asarray(positions)[self.first_of], self.corners,
-                               self.incidence)
-            self.interleaved[:, 3:6] = n[self.weld_inv]
+        n = self._normals(positions)
+        self.interleaved[:, 3:6] = n if self.smooth is None else normals.smooth(n, self.smooth)
         self.vbo.write(self.interleaved)
         self.holds_rest = positions is self.rest
+
+    def _normals(self, positions: np.ndarray) -> np.ndarray:
+        """Smooth vertex normals (N, 3) of ``positions`` (on the welded mesh if split)."""
+        if self.weld_inv is None:
+            return vertex_normals(positions, self.corners, self.incidence)
+        n = vertex_normals(np.asarray(positions)[self.first_of], self.corners, self.incidence)
+        return n[self.weld_inv]
 
     def release(self) -> None:
         for o in (*self._vaos.values(), self.ibo, self.vbo, self.uv_vbo, self.face_vbo,
