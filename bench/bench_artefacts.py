@@ -150,7 +150,7 @@ def main() -> None:
         from mimika.render.sheet import save_png
 
         save_png(sheet.quantize(256, method=Image.Quantize.MEDIANCUT,
-                                dither=Image.Dither.NONE).convert("RGB"), a.sheet)
+                                dither=Image.Dither.FLOYDSTEINBERG).convert("RGB"), a.sheet)
         print(f"wrote {a.sheet}")
 
 

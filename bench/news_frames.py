@@ -57,7 +57,9 @@ def main() -> None:
         said = next((c.text for c in cues if c.start <= t <= c.end), "")
         labels.append(f"{t:.0f} s  {said}".strip())
     sheet = Image.fromarray(contact_sheet(frames, labels, columns=a.columns))
-    sheet = sheet.quantize(256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    # dithered: undithered, the skin and the studio's gradients broke into bands
+    sheet = sheet.quantize(256, method=Image.Quantize.MEDIANCUT,
+                           dither=Image.Dither.FLOYDSTEINBERG)
     a.out.parent.mkdir(parents=True, exist_ok=True)
     sheet.save(a.out, optimize=True)
     print(f"wrote {a.out} ({len(frames)} frames, {a.out.stat().st_size // 1024} kB)")
