@@ -1,6 +1,6 @@
 """Where the teeth sit behind the lips, against the ICT Face Model (a real actor's scan).
 
-Per head, at rest and in three mouth poses: how far the upper incisors' edge lies below the
+Per head, at rest and in four mouth poses: how far the upper incisors' edge lies below the
 inner edge of the upper lip (landmark 62), how far the lower incisors' edge stands above that
 of the lower lip (66), the gap between the rows and between the lips (mm, at the midline);
 ``show`` is the share of the lip opening the upper teeth fill; ``behind`` how far each row's
@@ -20,7 +20,7 @@ import sys
 import numpy as np
 
 POSES = {"rest": {}, "25": {"AU25": 1.0}, "6+12+25": {"AU06": 1.0, "AU12": 1.0, "AU25": 1.0},
-         "26": {"AU26": 1.0}}
+         "26": {"AU26": 1.0}, "27": {"AU27": 1.0}}
 
 
 def incisors(head, rig) -> tuple[list[tuple[str, np.ndarray]], np.ndarray, np.ndarray]:
