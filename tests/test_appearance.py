@@ -45,8 +45,10 @@ def test_an_open_mouth_is_darker_inside_than_its_lips(any_rig):
     y = img.mean(2)
     assert opening.sum() > 200 and lips.sum() > 200
     assert y[opening].mean() < 0.85 * y[lips].mean()
-    # shaded by depth: its darkest part (the throat, under the palate) is near black
-    assert np.percentile(y[opening], 10) < 0.35 * y[lips].mean()
+    # shaded by depth: its darkest part (the throat, under the palate) is near black — against
+    # the lit lips (the lips' mean is itself dark on dark skin; with the teeth hidden, the
+    # gap they leave below the tongue is black only while the lower lip bares them)
+    assert np.percentile(y[opening], 10) < 0.3 * np.percentile(y[lips], 90)
 
 
 def test_the_mouth_interior_follows_the_opening(character_rig):

@@ -49,6 +49,25 @@ def test_an_open_smile_shows_the_upper_teeth_and_hides_the_lower(name):
     assert pos["teeth"][lo, 1].max() - ll < 0.15  # the lower incisors stay behind the lip
 
 
+@pytest.mark.parametrize("name", ["amara", "mei"])
+def test_a_dropped_jaw_keeps_the_lower_lip_over_the_lower_teeth(name):
+    """ICT's actor at AU26 and AU27: the lower incisors' edge 0.1 and 0.5 mm above the lower
+    lip, the lips as far apart as the teeth. MakeHuman's jawOpen dropped the lip a quarter
+    further than the teeth: 4 and 7 mm of the lower row bared under a wide-open mouth."""
+    from mimika.face.heads import load_head
+
+    head, rig = load_head(name)
+    up, lo = _incisors(head, rig)
+    lm = head.landmarks
+    for au in ("AU26", "AU27"):
+        pos = rig.deform({au: 1.0})
+        bared = pos["teeth"][lo, 1].max() - pos["skin"][lm[66], 1]
+        assert bared < 0.1, au  # cm
+        teeth = pos["teeth"][up, 1].min() - pos["teeth"][lo, 1].max()
+        lips = pos["skin"][lm[62], 1] - pos["skin"][lm[66], 1]
+        assert lips < teeth + 0.35, au
+
+
 def _upper_lip(head) -> np.ndarray:
     """Skin vertices nearer (along the skin) to the upper lip's outer middle (landmark 51)
     than to the lower's (57) and within 2 cm of the mouth."""

@@ -22,7 +22,7 @@ from mimika.face.makehuman import cache
 from mimika.face.makehuman.base import first_copies, landmark_ids
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
 from mimika.face.makehuman.character_file import Character, load_character_spec
-from mimika.face.makehuman.lips import seal_lips
+from mimika.face.makehuman.lips import lower_lip_follows_jaw, seal_lips
 from mimika.face.makehuman.paint import parts_of
 from mimika.face.makehuman.skeleton import rest_pose, skin
 from mimika.face.makehuman.teeth import seat_teeth
@@ -201,7 +201,7 @@ def built_character(character: Character) -> Built:
             cache.save(path, built)
         except OSError as e:
             log.warning("cannot cache character %r in %s: %s", character.name, path, e)
-    return seal_lips(seat_teeth(built))
+    return seal_lips(lower_lip_follows_jaw(seat_teeth(built)))
 
 
 _LOADED: dict[str, tuple[Head, SkinnedRig]] = {}

@@ -28,6 +28,8 @@ from mimika.face.makehuman.build import Built
 
 #: the most of ``mouthClose`` a rest pose takes (it presses the lips together beyond that)
 MAX_WEIGHT = 0.2
+#: how far (base units) beyond the lower lip's outline the jaw's motion fades into its own
+JAW_REACH = 0.08
 
 
 def _inner_lips() -> tuple[np.ndarray, np.ndarray]:
@@ -67,3 +69,58 @@ def seal_lips(built: Built) -> Built:
     base[skin.weld] += w * built.deltas[skin.name][k]
     return dataclasses.replace(built, pieces=pieces, base_vertices=base.astype(
         built.base_vertices.dtype), lip_seal=w)
+
+
+def lower_lip_follows_jaw(built: Built) -> Built:
+    """``built`` with the lower lip carried by ``jawOpen`` as the jaw carries the lower
+    incisors.
+
+    MakeHuman's ``jawOpen`` drops the lower lip a quarter further than the lower incisors and
+    the chin (33, 26, 27 mm), so an open mouth bared the lower row — 4 mm at AU26, 7 mm at
+    AU27 — where the ICT scan of an actor keeps the lip at the teeth's edge (0.1, 0.5 mm). On
+    the lower lip (between its outer and inner outline, fading out over :data:`JAW_REACH`
+    beyond them and toward the corners) the skin's ``jawOpen`` becomes the front incisors'."""
+    from mimika.face.makehuman.teeth import front_incisors, rows
+
+    teeth = next((p for p in built.pieces if p.name == "teeth"), None)
+    if teeth is None or "jawOpen" not in built.shape_names:
+        return built
+    k = built.shape_names.index("jawOpen")
+    lower = rows(built)
+    front = front_incisors(built, teeth, lower)
+    if not front.any():
+        return built
+    incisors = built.deltas["teeth"][k][front].astype(np.float64).mean(0)
+    skin = built.pieces[0]
+    d = built.deltas[skin.name].copy()
+    # only what the jaw already carries (the upper lip touches the lower one at rest)
+    carried = d[k][:, 1] / min(float(incisors[1]), -1e-9)
+    w = _lower_lip_weight(built.base_vertices.astype(np.float64),
+                          skin.vertices.astype(np.float64)) \
+        * np.clip((carried - 0.3) / 0.3, 0.0, 1.0)
+    d[k] += (w[:, None] * (incisors - d[k])).astype(d.dtype)
+    return dataclasses.replace(built, deltas={**built.deltas, skin.name: d})
+
+
+def _lower_lip_weight(base: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Per skin vertex ``v``: 1 on the lower lip (between its outer outline 48, 59-55, 54 and
+    its inner one 60, 67-65, 64), fading to 0 :data:`JAW_REACH` beyond and at the corners."""
+    from scipy.spatial import cKDTree
+
+    ids = landmark_ids()
+    outer = _resample(base[ids[[48, 59, 58, 57, 56, 55, 54]]], 60)
+    inner = _resample(base[ids[[48, 60, 67, 66, 65, 64, 54]]], 60)
+    area = np.concatenate([inner + (outer - inner) * a for a in np.linspace(0.0, 1.0, 7)])
+    dist = cKDTree(area).query(v)[0]
+    mid = 0.5 * (base[ids[48], 0] + base[ids[54], 0])
+    half = 0.5 * abs(base[ids[54], 0] - base[ids[48], 0])
+    corner = np.clip((np.abs(v[:, 0] - mid) / half - 0.6) / 0.4, 0.0, 1.0)
+    return np.exp(-(dist / (0.5 * JAW_REACH)) ** 2) * (1.0 - corner * corner * (3 - 2 * corner))
+
+
+def _resample(line: np.ndarray, n: int) -> np.ndarray:
+    """``n`` points evenly spaced in index along the polyline ``line`` (K, 3)."""
+    seg = np.linspace(0, len(line) - 1, n)
+    i = np.minimum(seg.astype(int), len(line) - 2)
+    f = (seg - i)[:, None]
+    return line[i] * (1 - f) + line[i + 1] * f
