@@ -15,6 +15,9 @@ where the ICT scan of an actor opens 3.8 mm; the speech visemes of /s t n/ opene
 against its 4.4-5.8). So the AUs that part the lips release the seal at once (``lip_release``
 in ``makehuman_aus.json``: the rig adds ``-seal`` of ``mouthClose`` with weight
 smoothstep(largest of those AUs / full_at)), and the opening then follows the AUs as ICT's.
+
+A dropping jaw carries the lower lip as it carries the lower incisors
+(:func:`lower_lip_follows_jaw`): MakeHuman's ``jawOpen`` let it fall past them.
 """
 
 from __future__ import annotations

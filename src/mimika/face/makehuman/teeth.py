@@ -88,9 +88,9 @@ def _edge(built: Built, v: np.ndarray, row: np.ndarray, upper: bool) -> float:
     return float(v[front, 1].min() if upper else v[front, 1].max())
 
 
-def front_incisors(built: Built, teeth: Piece, lower: np.ndarray) -> np.ndarray:
-    """Mask of the lower row's central incisors (not their gum) over ``teeth``'s vertices."""
-    return _front(built, teeth.vertices, lower & ~_on_gum(teeth))
+def front_incisors(built: Built, teeth: Piece, row: np.ndarray) -> np.ndarray:
+    """Mask over ``teeth``'s vertices of the central incisors (not their gum) of ``row``."""
+    return _front(built, teeth.vertices, row & ~_on_gum(teeth))
 
 
 def _lengthen_crowns(built: Built, v: np.ndarray, lower: np.ndarray, gum: np.ndarray,
