@@ -50,3 +50,16 @@ def test_renderer_and_export_shade_hair_by_its_volume(daniel):
     start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
     exported = np.frombuffer(blob, np.float32, acc["count"] * 3, start).reshape(-1, 3)
     assert np.allclose(exported, drawn, atol=1e-3)
+
+
+def test_hair_materials_are_those_the_renderer_shades_as_hair():
+    """One list for the glTF writer (which may not import the renderer) and the renderer's
+    own material table: a new hair material in one is a hair material in both."""
+    import json
+    from importlib import resources
+
+    table = json.loads(resources.files("mimika.render").joinpath(
+        "data", "materials.json").read_text("utf-8"))
+    table = table.get("materials", table)
+    hair = {k for k, v in table.items() if isinstance(v, dict) and v.get("model") == "hair"}
+    assert hair == set(normals.HAIR_MATERIALS)
