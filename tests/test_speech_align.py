@@ -117,19 +117,25 @@ def test_words_beside_pauses_keep_their_edges_in_a_reverberant_room(lang, voice,
     assert len(near) >= 4 and max(near) <= 0.07, np.round(near, 3)
 
 
-@pytest.mark.parametrize("voice, word, pitch", [("f3", "Damen", 50), ("klatt", "regnen", 30)])
-def test_a_word_before_a_pause_ends_where_its_sound_ends(voice, word, pitch):
-    """Two voices other than the reference: f3 pauses 142 ms after "Damen" where espeak's
+DAMEN = ('<speak>Guten Abend, meine Damen und Herren. <break time="300ms"/> Zuerst das '
+         'Wetter: Morgen wird es regnen.</speak>')
+
+
+@pytest.mark.parametrize("lang, doc, voice, word, pitch", [
+    ("de", DAMEN, "f3", "Damen", 50), ("de", DAMEN, "klatt", "regnen", 30),
+    ("pl", '<speak>Dobry wieczór państwu. <break time="400ms"/> Najpierw pogoda.</speak>',
+     "klatt", "państwu", 30)])
+def test_a_word_before_a_pause_ends_where_its_sound_ends(lang, doc, voice, word, pitch):
+    """Voices other than the reference: f3 pauses 142 ms after "Damen" where espeak's
     reference pauses 30 ms, and the word's end was moved onto "und"'s first sound inside that
     pause (112 ms late); klatt ends "regnen" with a closure and a short, loud "-nen" after it,
-    too short to count as speech on its own (138 ms early). Both now within 50 ms."""
+    too short to count as speech on its own (138 ms early), and whispers the /u/ of
+    "państwu" 25 dB under its vowels up to digital silence (100 ms early). All within 50 ms."""
     from mimika.speech.ssml import parse, plain_text
 
-    doc = ('<speak>Guten Abend, meine Damen und Herren. <break time="300ms"/> Zuerst das '
-           'Wetter: Morgen wird es regnen.</speak>')
     rate = 150 if voice == "f3" else 175
-    truth = synthesize(doc, lang="de", ssml=True, voice=voice, rate=rate, pitch=pitch)
-    est = align(truth.audio, sr=truth.sr, transcript=plain_text(parse(doc)), lang="de",
+    truth = synthesize(doc, lang=lang, ssml=True, voice=voice, rate=rate, pitch=pitch)
+    est = align(truth.audio, sr=truth.sr, transcript=plain_text(parse(doc)), lang=lang,
                 engine="dtw")
     k = [w.text for w in truth.words].index(word)
     assert abs(est.words[k].end - truth.words[k].end) <= 0.05
@@ -202,3 +208,20 @@ def test_word_after_a_pause_starts_at_its_first_sound():
         out = refine_edges(phones, act, is_stop=lambda s: is_stop(s, "de"))
         assert out[1].start == pytest.approx(1.2 - lead)
     assert CLOSURE > ONSET
+
+
+def test_a_faint_word_end_reaches_digital_silence_but_not_room_noise():
+    """Quiet frames after a word's sound belong to it when all-zero samples follow within
+    0.15 s (nothing else sounds there); followed by a quiet room, they stay a pause."""
+    from mimika.speech.vad import SILENCE_DB, to_silence
+
+    act = np.zeros(100, bool)
+    act[10:40] = True
+    e = np.full(100, -20.0)
+    e[40:50] = -45.0  # a whisper under the activity threshold
+    e[50:] = SILENCE_DB - 1.0
+    assert to_silence(act, e)[10:50].all() and not to_silence(act, e)[50:].any()
+    e[50:] = -70.0  # a room's noise floor, never digital silence
+    assert (to_silence(act, e) == act).all()
+    e[40:70], e[70:] = -45.0, SILENCE_DB - 1.0  # digital silence only 0.3 s later
+    assert (to_silence(act, e) == act).all()

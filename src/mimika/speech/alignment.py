@@ -479,7 +479,16 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     from mimika.speech import espeak, pieces, sphinx
     from mimika.speech.phonemes import is_stop
     from mimika.speech.tts import split_sentences
-    from mimika.speech.vad import above, frame_energy, pad, refine_edges, sustained, trailing, unpad
+    from mimika.speech.vad import (
+        above,
+        frame_energy,
+        pad,
+        refine_edges,
+        sustained,
+        to_silence,
+        trailing,
+        unpad,
+    )
     from mimika.speech.words import Token, as_read, tokens
 
     if engine not in ENGINES:
@@ -521,7 +530,8 @@ def align(audio: np.ndarray, *, sr: int, transcript: str, lang: str = "en",
     # a room's tail holds the energy up after a sound ends: words before a pause end where
     # it is still near the speech level; in a dry one a short last syllable after a closure
     # still belongs to the word
-    ends = sustained(above(energy, ROOM_END_THRESHOLD)) if room else trailing(act, raw)
+    ends = sustained(above(energy, ROOM_END_THRESHOLD)) if room else to_silence(
+        trailing(act, raw), energy)
     phones = refine_edges(phones, act, ends=ends, is_stop=lambda sym: is_stop(sym, code))
     spans: dict[int, list[float]] = {}  # from every phone, even one DTW squeezed to nothing
     for p, o in zip(phones, owner, strict=True):

@@ -32,6 +32,8 @@ ONSET = 0.025
 LONG_PAUSE = 0.15
 #: a silence this long before the end of a pause phone: what sounds after it is the next word
 NEXT_GAP = 0.1
+#: frame energy (:func:`frame_energy`) of all-zero samples: the 1e-10 floor's −100 dB
+SILENCE_DB = -99.0
 #: a burst this close after sustained sound belongs to it (s): a weak word ending's last
 #: syllable, too short to count on its own (German "regnen" after its /g/)
 TRAIL_GAP = 0.15
@@ -92,6 +94,24 @@ def trailing(act: np.ndarray, raw: np.ndarray, *, hop: float = HOP, gap: float =
         elif i - last <= reach:
             out[last + 1:i + 1] = True
             last = i
+    return out
+
+
+def to_silence(act: np.ndarray, e: np.ndarray, *, hop: float = HOP, reach: float = EDGE_WINDOW
+               ) -> np.ndarray:
+    """``act`` with each active run extended through the quiet frames after it when digital
+    silence (:data:`SILENCE_DB`, the all-zero samples TTS output and edited audio carry between
+    sentences) begins within ``reach`` s: nothing there is a pause yet, so a word's faint end —
+    a devoiced final vowel under the activity threshold — still belongs to it."""
+    out = act.copy()
+    silent = e <= SILENCE_DB
+    n, k = len(act), round(reach / hop)
+    for i in np.flatnonzero(act[:-1] & ~act[1:]):
+        j = i + 1
+        while j < n and j - i <= k and not silent[j] and not act[j]:
+            j += 1
+        if j < n and j - i <= k and silent[j]:
+            out[i + 1:j] = True
     return out
 
 
