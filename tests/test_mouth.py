@@ -113,6 +113,22 @@ def test_a_relaxed_mouth_is_closed_and_au25_parts_it(name):
     assert gap(rig.deform({"AU25": 1.0})["skin"]) > 4.0
 
 
+@pytest.mark.parametrize("name", ["amara", "daniel", "mei", "tomas"])
+def test_the_nose_wrinkler_raises_the_upper_lip_off_the_lower(name):
+    """AU09 lifts the upper lip and leaves the lower one (ICT's actor: 7.9 and 0.9 % of the
+    eye distance; the lips part 10.8 %). Half of a character's AU09 is ICT's sneer carried
+    on as one field over both lips: it lifted the lower lip as far, and disgust (9+17) was
+    a closed pout that read "angry". Now the lower lip stays and the lips part."""
+    from mimika.face.calibration import inter_ocular, lip_opening
+    from mimika.face.heads import load_head
+
+    head, rig = load_head(name)
+    lm, iod = head.landmarks, inter_ocular(head)
+    dy = (rig.deform({"AU09": 1.0})["skin"] - head["skin"].vertices)[:, 1] / iod
+    assert dy[lm[62]] > 0.05 and abs(dy[lm[66]]) < 0.35 * dy[lm[62]]
+    assert lip_opening(rig, {"AU09": 1.0}) > 0.05
+
+
 @pytest.mark.parametrize("name", ["amara", "daniel", "tomas"])
 def test_lips_pressed_together_at_rest_part_as_soon_as_an_au_parts_them(name):
     """Seen from the front, AU25 at B and a /t/ open the lips as a real mouth does (ICT's

@@ -2,8 +2,8 @@
 
 One field per shape (``browDown_L`` … ``noseSneer_R``, 53 in all), fitted exactly as
 :func:`~mimika.face.fitting.ict.fit_ict` fits an AU (same frame, splits, held-out half and
-families); mouth and jaw shapes are split by the mouth, lid shapes by the eye fissure (rich
-family). The document is an ordinary fields file whose ``shapes`` section holds the fields by
+families); mouth, jaw and nose shapes are split by the mouth, lid shapes by the eye fissure
+(rich family). The document is an ordinary fields file whose ``shapes`` section holds the fields by
 shape name (``aus`` stays empty); :func:`shape_fields` parses it. Carried to any face by its
 landmarks, these fields generate ARKit-named blendshapes (``mimika rig``) and the shapes an
 avatar lacks (``--head avatar.glb``).
@@ -43,9 +43,11 @@ __all__ = ["fit_character_shapes", "fit_ict_shapes", "fit_shapes", "shape_fields
 
 
 def shape_split(name: str, lid_split: bool) -> str | None:
-    """The split surface a shape's field is fitted with: ``mouth`` for mouth and jaw shapes,
-    ``eyes`` for the lid shapes (rich family), none for brows, cheeks and nose."""
-    if name.startswith(("mouth", "jaw")):
+    """The split surface a shape's field is fitted with: ``mouth`` for mouth, jaw and nose
+    shapes (the sneer raises the upper lip: ICT's actor's 0.042 inter-ocular distances, the
+    lower lip's 0.007 — unsplit, its field lifted a closed mouth's lower lip as far),
+    ``eyes`` for the lid shapes (rich family), none for brows and cheeks."""
+    if name.startswith(("mouth", "jaw", "nose")):
         return "mouth"
     if lid_split and name.startswith("eye"):
         return "eyes"
