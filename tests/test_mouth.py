@@ -129,6 +129,24 @@ def test_the_nose_wrinkler_raises_the_upper_lip_off_the_lower(name):
     assert lip_opening(rig, {"AU09": 1.0}) > 0.05
 
 
+def test_lips_close_at_p_b_m_in_a_disgusted_face():
+    """AU09 now parts the lips (above), so a bilabial relaxes it as it does AU10: a
+    disgusted speaker still closes the lips at every /p b m/, the nose wrinkled between."""
+    pytest.importorskip("espeakng_loader")
+    from mimika.face.calibration import lip_opening
+    from mimika.face.heads import load_head
+    from mimika.speech import bilabial_apex_times, combine, mouth_track, synthesize
+    from mimika.tracks import AUTrack
+
+    u = synthesize("Bob, Pam and Mum bought a bumper box.", lang="en", engine="espeak")
+    tr = combine(mouth_track(u, fps=25), AUTrack.constant({"AU09": 1.0, "AU17": 0.8}, fps=25))
+    _, rig = load_head("daniel")
+    apex = bilabial_apex_times(u)
+    assert len(apex) >= 6
+    assert max(lip_opening(rig, tr.frame(round(t * 25))) for t in apex) == 0.0
+    assert np.median(tr["AU09"]) > 0.8  # the nose stays wrinkled between them
+
+
 @pytest.mark.parametrize("name", ["amara", "daniel", "tomas"])
 def test_lips_pressed_together_at_rest_part_as_soon_as_an_au_parts_them(name):
     """Seen from the front, AU25 at B and a /t/ open the lips as a real mouth does (ICT's

@@ -54,7 +54,7 @@ def _morph_codes(rig: Any) -> list[str]:
 
 
 _TARGETS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-#: the morph of the rig's ``release`` (lips held together at rest, parted by AU10/16/25–27):
+#: the morph of the rig's ``release`` (lips held together at rest, parted by AU09/10/16/25–27):
 #: its weight follows those AUs (``extras.rig.release``), animated like the AUs' own
 RELEASE = "lips_release"
 
