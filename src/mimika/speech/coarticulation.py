@@ -186,9 +186,9 @@ def apply_closures(values: np.ndarray, channels: Sequence[str], *, fps: float,
 
     Windows are ``(hold_start, hold_end, apex)`` in seconds. At weight 1 (hold window and the
     frames bracketing the apex) the rule holds exactly; around it the frames blend into it.
-    Rules (``visemes.json`` → ``closure``): bilabial — AU09, AU10, AU16, AU25, AU26, AU27, AU28 = 0,
-    AU22 ≤ 0.2, AU24 ≥ 0.4 + 0.3·AU12; labiodental — AU16 = AU24 = AU27 = 0, AU26 ≤ 0.08,
-    AU28 ≥ 0.3, AU10 ≥ 0.15, AU25 ≥ 0.2.
+    Rules (``visemes.json`` → ``closure``): bilabial — AU09, AU10, AU16, AU25, AU26, AU27,
+    AU28 = 0, AU22 ≤ 0.2, AU24 ≥ 0.4 + 0.3·AU12; labiodental — AU16 = AU24 = AU27 = 0,
+    AU26 ≤ 0.08, AU28 ≥ 0.3, AU10 ≥ 0.15, AU25 ≥ 0.2.
     """
     need = {"AU24", "AU25", "AU26"}
     if not need <= set(channels):

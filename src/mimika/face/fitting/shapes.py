@@ -3,10 +3,10 @@
 One field per shape (``browDown_L`` … ``noseSneer_R``, 53 in all), fitted exactly as
 :func:`~mimika.face.fitting.ict.fit_ict` fits an AU (same frame, splits, held-out half and
 families); mouth, jaw and nose shapes are split by the mouth, lid shapes by the eye fissure
-(rich family). The document is an ordinary fields file whose ``shapes`` section holds the fields by
-shape name (``aus`` stays empty); :func:`shape_fields` parses it. Carried to any face by its
-landmarks, these fields generate ARKit-named blendshapes (``mimika rig``) and the shapes an
-avatar lacks (``--head avatar.glb``).
+(rich family). The document is an ordinary fields file whose ``shapes`` section holds the
+fields by shape name (``aus`` stays empty); :func:`shape_fields` parses it. Carried to any face
+by its landmarks, these fields generate ARKit-named blendshapes (``mimika rig``) and the shapes
+an avatar lacks (``--head avatar.glb``).
 """
 
 from __future__ import annotations
