@@ -44,6 +44,10 @@ MUCOSA = (0.376, 0.085, 0.077)
 INNER = ("eyes", "teeth")
 #: the key light's penumbra (cm) for soft and hard shadows
 PENUMBRA = {"soft": 0.45, "hard": 0.1}
+#: soft shadows on skin: the penumbra's growth per cm from what casts the shadow to what
+#: receives it (the tangent of the key's angular radius: a softbox 0.5 m across at 2.5 m),
+#: and the widest (cm)
+SOFTBOX = (0.1, 1.2)
 #: the mesh shader's variant (a ``#define``) of each shading model but the standard one:
 #: hair strands (textured parts only), the eye's sclera and iris, the cornea
 MODEL_DEFINES = {"hair": "HAIR", "eye": "EYE", "iris": "IRIS", "cornea": "CORNEA"}
@@ -758,15 +762,24 @@ class Renderer:
     def _shadows(self) -> bool:
         return self.lighting.shadows != "off"
 
+    @property
+    def _soft(self) -> bool:
+        """Shadows on skin widen with the distance from what casts them (a separate program
+        variant: llvmpipe runs every branch of a shader, taken or not)."""
+        return self.lighting.shadows == "soft"
+
     def _program(self, gl: dict, textured: bool, model: str = "standard",
-                 depth_only: bool = False, groups: int = 0, detail: bool = False) -> Any:
+                 depth_only: bool = False, groups: int = 0, detail: bool = False,
+                 skin: bool = False) -> Any:
         """The mesh program variant: ``textured``, the shading ``model`` (a material's:
         :data:`MODEL_DEFINES`), ``depth_only`` (texture coverage only, for a depth pre-pass),
         ``groups`` (the skin's appearance changes: the wrinkle groups compiled in, 0 for none),
-        ``detail`` (a normal and roughness map); compiled on first use with the lights set."""
+        ``detail`` (a normal and roughness map), ``skin`` (a skin-like material: soft shadows
+        widen with distance on it); compiled on first use with the lights set."""
         shading = (MODEL_DEFINES[model],) if model in MODEL_DEFINES else ()
+        shadows = self._shadows and not depth_only
         key = (("TEXTURED",) * textured + shading + ("DEPTH_ONLY",) * depth_only
-               + ("SHADOWS",) * (self._shadows and not depth_only)
+               + ("SHADOWS",) * shadows + ("SOFT_SHADOWS",) * (shadows and skin and self._soft)
                + ("WRINKLES", f"WR_GROUPS {groups}") * bool(groups and not depth_only)
                + ("DETAIL",) * (detail and not depth_only))
         progs = gl["progs"]
@@ -844,13 +857,19 @@ class Renderer:
         # sampled toward the light and along the normal (against acne): the wider the
         # filter, the farther its taps reach over a curved surface, the more
         pen = PENUMBRA[self.lighting.shadows]
+        spread, widest = SOFTBOX
         toward = np.eye(4)
         toward[2, 3] = 1.5 * texel + 0.6 * pen
+        depth_cm = 2.0 * (gl["extent"] + half)  # one unit of the map's depth
         gl["shadow"] = {"u_shadow_matrix": (proj @ toward @ view).T.astype("f4").tobytes(),
                         "u_shadow_offset": 1.5 * texel + 0.3 * pen,
                         "u_shadow_radius": pen / texel,
+                        "u_shadow_max": widest / texel,
+                        "u_shadow_spread": spread * depth_cm / texel,
+                        "u_shadow_slope": texel / depth_cm,
                         "u_shadow_texel": (1.0 / size, 1.0 / size)}
         gl["shadow_tex"].use(location=3)
+        gl["shadow_depth"].use(location=4)
         progs = [p for k, p in gl["progs"].items() if "SHADOWS" in k]
         if self._skin is not None:
             progs += self._skin.programs
@@ -868,6 +887,8 @@ class Renderer:
                 prog[name].value = value
         if has_uniform(prog, "u_shadow_map"):
             prog["u_shadow_map"].value = 3
+        if has_uniform(prog, "u_shadow_depth"):
+            prog["u_shadow_depth"].value = 4
 
     def _set_landmarks(self, prog: Any) -> None:
         for name, value in self._wrinkles.uniforms.items():
@@ -889,7 +910,7 @@ class Renderer:
         detail = None if depth_only else o.details.get(first)
         model = mat.model if textured or mat.model != "hair" else "standard"
         prog = self._program(gl, textured, model, textured and depth_only, groups,
-                             detail is not None)
+                             detail is not None, mat.name in SKIN_LIKE)
         self._set_material(prog, mat, tex, mode)
         if detail is not None:
             detail.use(location=2)
@@ -1018,6 +1039,11 @@ class Renderer:
             tex.repeat_x = tex.repeat_y = False
             gl["attachments"].append(tex)
             gl["shadow_tex"] = tex
+            # the same depths read as numbers, for the blocker search
+            gl["shadow_depth"] = ctx.sampler(texture=tex, compare_func="",
+                                             filter=(ctx.NEAREST, ctx.NEAREST),
+                                             repeat_x=False, repeat_y=False)
+            gl["attachments"].append(gl["shadow_depth"])
             gl["shadow_fbo"] = ctx.framebuffer(depth_attachment=tex)
         if self.skin_shader:
             from mimika.render.skin import SkinShader
@@ -1025,8 +1051,9 @@ class Renderer:
             uvs = {o.name: o.uvs for o in self.head.objects if o.uvs is not None}
             if uvs:
                 params = None if isinstance(self.skin_shader, bool) else self.skin_shader
-                self._skin = SkinShader(ctx, self._objects, uvs, lit, params,
-                                        ("SHADOWS",) if self._shadows else (), ("WRINKLES",))
+                shadows = ("SHADOWS",) * self._shadows + ("SOFT_SHADOWS",) * self._soft
+                self._skin = SkinShader(ctx, self._objects, uvs, lit, params, shadows,
+                                        ("WRINKLES",))
                 for p in self._skin.programs:
                     if has_uniform(p, "u_mucosa"):
                         p["u_mucosa"].value = MUCOSA
