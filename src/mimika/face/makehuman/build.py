@@ -192,7 +192,7 @@ def settle_cloth(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: n
     are the whole body, hidden parts included) rest on it, then panels that cross others are
     lifted clear of them and a panel crumpled through itself is smoothed (:mod:`.layers`). The
     moves are carried back to bind space through each vertex's blended rotation. Returns how
-    many positions moved."""
+    many vertices moved."""
     from mimika.face.makehuman.layers import layer_offsets, lift_over, smooth_crumples, welded
     from mimika.face.makehuman.paint.regions import uv_islands
 
@@ -203,18 +203,47 @@ def settle_cloth(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: n
     move = lift_over(pos, wtris, body, body_tris)
     move += layer_offsets(pos + move, wtris, islands)
     move += smooth_crumples(pos + move, wtris, islands)
-    moved = np.flatnonzero(np.abs(move).max(1) > 0)
-    if not len(moved):
+    moved = _carry_back(cloth, weights, pose, move[inv])
+    log.debug("%s: %d vertices settled on the body and clear of other layers", cloth.name,
+              moved)
+    return moved
+
+
+#: how far hair rests above the skin at least, and how deep under it a dip is mended (base
+#: units: 1.5 mm, 3 mm)
+HAIR_CLEARANCE = (0.015, 0.03)
+
+
+def settle_hair(hair: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: np.ndarray,
+                body_tris: np.ndarray) -> int:
+    """Lift hair off the skin where it lies within :data:`HAIR_CLEARANCE` of it or dips
+    just under it. The proxies' shells hug the scalp within a millimetre at the hairline;
+    where one passes under the forehead's flat triangles the depth test cuts the hairline
+    into a jagged edge and its strand tips never show. Deeper parts (a lock meant to pass
+    behind an ear) stay. Returns how many vertices moved."""
+    from mimika.face.makehuman.layers import lift_over, welded
+
+    tris = np.concatenate(list(hair.parts.values()))
+    posed = skin(hair.vertices.astype(np.float64), weights, pose)
+    pos, wtris, inv = welded(posed, tris)
+    margin, depth = HAIR_CLEARANCE
+    move = lift_over(pos, wtris, body, body_tris, margin=margin, depth=depth)
+    return _carry_back(hair, weights, pose, move[inv])
+
+
+def _carry_back(piece: Piece, weights: sp.csr_matrix, pose: np.ndarray, step: np.ndarray
+                ) -> int:
+    """Move ``piece``'s vertices by ``step`` (N, 3), given in the posed space of bone
+    transforms ``pose``, carried back to bind space through each vertex's blended rotation.
+    Returns how many moved."""
+    sel = np.flatnonzero(np.abs(step).max(1) > 0)
+    if not len(sel):
         return 0
     rot = (weights @ pose[:, :, :3].reshape(len(pose), 9)).reshape(-1, 3, 3)
-    step = move[inv]
-    sel = np.flatnonzero(np.abs(step).max(1) > 0)
-    bind = cloth.vertices.astype(np.float64)
+    bind = piece.vertices.astype(np.float64)
     bind[sel] += np.linalg.solve(rot[sel], step[sel][:, :, None])[:, :, 0]
-    cloth.vertices = bind.astype(np.float32)
-    log.debug("%s: %d positions settled on the body and clear of other layers", cloth.name,
-              len(moved))
-    return len(moved)
+    piece.vertices = bind.astype(np.float32)
+    return len(sel)
 
 
 def blend_cloth_weights(cloth: Piece, weights: sp.csr_matrix, radius: float = 0.3
@@ -351,6 +380,8 @@ def build(phenotype: dict[str, float], outfit: Outfit,
     for p in pieces:
         if p.category == "body":
             settle_cloth(p, weights[p.name], rest, body, body_tris)
+        elif p.name == "hair":
+            settle_hair(p, weights[p.name], rest, body, body_tris)
     for _ in range(2):  # a second pass catches skin the first one's moves turned outward
         for p in pieces:
             if p.category == "body":
