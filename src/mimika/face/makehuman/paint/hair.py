@@ -32,6 +32,8 @@ CARD_CM2 = 250.0
 SEGMENT_CM = 0.5
 #: how many tapered locks end together at a fringe or hairline (a clump)
 CLUMP_LOCKS = 6.0
+#: opacity of a lock at its very tip (it grows to 1 over its taper)
+TIP_OPACITY = 0.3
 
 
 def styles() -> dict:
@@ -75,7 +77,12 @@ def _locks(table: _Table, x: np.ndarray, grown: np.ndarray, soft: np.ndarray
     r = 0.4 * r + 0.6 * table(x / CLUMP_LOCKS + 1000.5)
     u = np.clip(grown - 0.6 * r, 0.0, 1.0) / 0.4
     half = 0.5 * np.sqrt(np.clip(u, 0.0, 1.0))
-    return smoothstep(0.0, 1.0, (half - np.abs(f - 0.5)) / np.maximum(soft, 0.05) + 0.5)
+    # a lock thins to a few strands before it ends: its last part is see-through; one
+    # narrower than a texel covers only its share of it
+    soft = np.maximum(soft, 0.05)
+    sheer = (TIP_OPACITY + (1.0 - TIP_OPACITY) * smoothstep(0.0, 1.0, u)) * \
+        np.clip(2.0 * half / soft, 0.0, 1.0)
+    return sheer * smoothstep(0.0, 1.0, (half - np.abs(f - 0.5)) / soft + 0.5)
 
 
 def _cells(p: np.ndarray, size: float, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
