@@ -233,6 +233,24 @@ def test_skin_uvs_remap_into_the_head_atlas_once(daniel):
     np.testing.assert_array_equal(skin.uvs, first)
 
 
+def test_the_halo_of_coily_hair_is_a_fine_frizz_not_a_lace_of_coils():
+    """The translucent cards around an afro drew whole coils (0.04 cm² blobs): at 720p a lace
+    of dark cells around the head. Now single hairs: specks a tenth of that."""
+    from scipy import ndimage
+
+    from mimika.face.makehuman.paint.hair import _coils, style
+
+    g = np.arange(0.0, 3.0, 0.01, dtype=np.float32)  # a 3 cm square of a halo card
+    x, y = np.meshgrid(g, g)
+    p = np.stack([x.ravel(), y.ravel(), np.full(x.size, 5.0, np.float32)], 1)
+    ones = np.ones(len(p), np.float32)
+    _, a = _coils(p, style("afro01"), 7, 5.0 * ones, 0.12 * ones, ones.astype(bool))
+    lab, _ = ndimage.label(a.reshape(x.shape) > 0.15)
+    specks = np.bincount(lab.ravel())[1:] * 1e-4  # cm²
+    assert np.median(specks) < 0.01
+    assert 0.2 < (a > 0.15).mean() < 0.7  # a halo, neither bare nor a veil
+
+
 def test_a_lock_of_hair_is_see_through_near_its_tip():
     """A lock thins to a few strands before it ends: drawn opaque to its point, daniel's
     fringe and mei's hairline were rows of solid teeth against the forehead."""

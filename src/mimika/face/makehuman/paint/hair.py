@@ -298,15 +298,18 @@ def _coils(p: np.ndarray, st: dict, seed: int, dist: np.ndarray, fade: np.ndarra
     spiral = 0.5 + 0.5 * np.sin(2 * np.pi * (3.0 * d1 + r) + 4.0 * fbm3(p, cs, seed + 4,
                                                                         octaves=1))
     fibre = value3(p, cs * 0.25, seed + 6, order=1)
-    tone = (0.6 + 0.55 * top) * (0.65 + 0.35 * crevice) * (0.88 + 0.24 * r) * \
-        (0.85 + 0.3 * spiral) * (0.9 + 0.2 * fibre)
+    tone = (0.75 + 0.35 * top) * (0.75 + 0.25 * crevice) * (0.88 + 0.24 * r) * \
+        (0.85 + 0.3 * spiral) * (0.8 + 0.4 * fibre)
     # coverage: whole coils, their edges soft; toward a border only the coils' cores remain
     grown = np.clip(dist / np.maximum(fade, 1e-3), 0.0, 1.0)
     body = smoothstep(0.0, 0.25, crevice * (0.4 + 0.6 * top) - 0.6 * (1.0 - grown))
     alpha = np.where(grown >= 1.0, 1.0, body)
-    # halo cards stay translucent (seen edge-on, opaque ones draw dark lines): coils of fuzz
-    alpha = np.where(card, np.minimum(body, 0.45) * (0.5 + 0.5 * spiral) *
-                     smoothstep(0.0, 0.3, grown), alpha)
+    # halo cards stay translucent (seen edge-on, opaque ones draw dark lines): a fine frizz
+    # of single hairs (drawn by whole coils, they read as a lace of dark blobs around the
+    # head)
+    frizz = smoothstep(0.45, 0.8, value3(p, cs * 0.15, seed + 7, order=1)) * \
+        (0.6 + 0.4 * fibre)
+    alpha = np.where(card, 0.5 * frizz * smoothstep(0.0, 0.3, grown), alpha)
     return tone, alpha
 
 
