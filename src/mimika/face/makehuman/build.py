@@ -209,9 +209,10 @@ def settle_cloth(cloth: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: n
     return moved
 
 
-#: how far hair rests above the skin at least, and how deep under it a dip is mended (base
-#: units: 1.5 mm, 3 mm)
-HAIR_CLEARANCE = (0.015, 0.03)
+#: how far hair rests above the skin at least, how deep under it a dip is mended, and how
+#: far above a lifted spot the hair rises with it (base units: 1.5 mm, 3 mm, 2 mm; lifting
+#: 1–4 cm of it, as cloth's layers are, turned a card at daniel's temple into a white streak)
+HAIR_CLEARANCE = (0.015, 0.03, 0.02)
 
 
 def settle_hair(hair: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: np.ndarray,
@@ -226,8 +227,8 @@ def settle_hair(hair: Piece, weights: sp.csr_matrix, pose: np.ndarray, body: np.
     tris = np.concatenate(list(hair.parts.values()))
     posed = skin(hair.vertices.astype(np.float64), weights, pose)
     pos, wtris, inv = welded(posed, tris)
-    margin, depth = HAIR_CLEARANCE
-    move = lift_over(pos, wtris, body, body_tris, margin=margin, depth=depth)
+    margin, depth, stack = HAIR_CLEARANCE
+    move = lift_over(pos, wtris, body, body_tris, margin=margin, depth=depth, stack=stack)
     return _carry_back(hair, weights, pose, move[inv])
 
 
