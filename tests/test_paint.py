@@ -434,6 +434,33 @@ def test_a_brow_is_drawn_evenly_to_its_tail(asset):
 
 
 @needs_anny
+@pytest.mark.parametrize("preset", ["amara", "daniel", "mei", "tomas"])
+def test_brows_begin_above_the_inner_eye_corners(preset):
+    """A brow's head sits over the inner corner of its eye: MakeHuman's cards run on down
+    the slope of the nose, and brows drawn from there stood close together (their heads
+    0.62–0.70 of the corners' spacing apart, now 0.79–0.88) and read as a frown at rest."""
+    from mimika.face.makehuman.build import SCALE
+    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.paint.regions import uv_islands
+
+    c = load_character_spec(preset)
+    _, lashes = _asset_piece(preset, "lashes", c.eyelashes)
+    tris = np.concatenate(list(lashes.parts.values()))
+    pos = lashes.vertices * SCALE
+    corner = min(np.abs(pos[ids, 0]).min() for ids, *_, lower in
+                 strokes._cards(pos, tris, uv_islands(tris, len(lashes.uvs)), "lash") if lower)
+    _, brows = _asset_piece(preset, "brows", c.eyebrows)
+    img = strokes.paint_strokes(brows, c, "brow")
+    at = rasterize(brows.uvs, np.concatenate(list(brows.parts.values())), img.shape[1::-1])
+    a = img.reshape(-1, 4)[at.texels, 3] / 255.0
+    x = at.at(brows.vertices[:, 0] * SCALE)
+    for side in (-1, 1):
+        ax, aa = np.abs(x[np.sign(x) == side]), a[np.sign(x) == side]
+        start = np.percentile(ax[aa > 0.3], 3)  # (a few texels of the UV gutter aside)
+        assert start > 0.75 * corner, (side, start, corner)
+
+
+@needs_anny
 @pytest.mark.parametrize("asset", ["eyelashes01", "eyelashes02", "eyelashes03", "eyelashes04"])
 def test_lashes_grow_along_the_lid_opening_only(asset):
     """An upper lash card that runs on past the eye's outer corner (toward the temple) has no

@@ -29,6 +29,10 @@ SIZE = 1024
 #: canvas resolution (cm per pixel) and supersampling of the drawing
 CANVAS_CM = 0.004
 SUPER = 3
+#: hair density at a brow's inner end, relative to its body
+HEAD_DENSITY = 0.8
+#: where a brow begins on its card, as a share of the card's width from its inner end
+BROW_START = 0.08
 
 
 def settings() -> dict:
@@ -161,14 +165,34 @@ def _brow_shape(st: dict, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Centre line and thickness (shares of the card height) of the brow along ``s``."""
     thick = st["head"] + (st["tail"] - st["head"]) * np.clip((s - 0.15) / 0.85, 0, 1) ** 1.2
     thick = thick * np.clip(s / 0.06, 0.35, 1.0) * np.clip((1.0 - s) / 0.04, 0.2, 1.0)
-    centre = st["centre"] + st["arch"] * (np.sin(np.pi * np.clip(s, 0, 1) ** 0.8) - 0.5) * 0.5
+    s = np.clip(s, 0, 1)
+    centre = st["centre"] + st["arch"] * (np.sin(np.pi * s ** 0.8) - 0.25 - 0.25 * s) * 0.5
     return centre, thick
 
 
-def brow_canvas(length_cm: float, height_cm: float, st: dict, seed: int
+def _density(s: np.ndarray) -> np.ndarray:
+    """Share of a brow's hairs along it: sparse and light at the head (a dense, dark head
+    reads as a knitted brow), densest in the body, thinning to the tail."""
+    return (HEAD_DENSITY + (1.0 - HEAD_DENSITY) * smoothstep(0.0, 0.25, s)) \
+        * np.clip(1.0 - 0.6 * (s - 0.25) / 0.75, 0.3, 1.0)
+
+
+def _brow_start(p: np.ndarray, s: np.ndarray) -> float:
+    """Where along a brow card (share of ``s``) the brow's head sits: :data:`BROW_START` of the
+    way out from the card's inner end across its width (``|x|``). MakeHuman's cards run on over the
+    glabella toward the nose; a brow drawn from there sits low and close to its twin and
+    reads as a frown (AU4) at rest."""
+    ax = np.abs(p[:, 0])
+    at = ax.min() + BROW_START * (ax.max() - ax.min())
+    order = np.argsort(s)
+    return float(np.interp(at, np.maximum.accumulate(ax[order]), s[order]))
+
+
+def brow_canvas(length_cm: float, height_cm: float, st: dict, seed: int, start: float = 0.0
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Coverage and tone canvases (y up = t) of one brow: a soft base of fine hairs under
-    individual strokes whose direction turns from upright (inner end) to lateral (tail)."""
+    individual strokes whose direction turns from upright (inner end) to lateral (tail).
+    The brow begins ``start`` (a share of the card's length) from the card's inner end."""
     rng = np.random.default_rng(seed)
     w = max(int(length_cm / CANVAS_CM), 8)
     h = max(int(height_cm / CANVAS_CM), 8)
@@ -176,13 +200,13 @@ def brow_canvas(length_cm: float, height_cm: float, st: dict, seed: int
     n = int(st["count"])
     s = rng.random(n * 3)
     v = rng.uniform(-1, 1, n * 3)
-    keep = rng.random(n * 3) < np.clip(1.0 - 0.6 * s, 0.3, 1)  # denser at the head
+    keep = rng.random(n * 3) < _density(s)
     s, v = s[keep][:n], v[keep][:n]
     stray = rng.random(len(s)) < st["fade"]
     v = np.where(stray, v * 1.6, v)
     centre, thick = _brow_shape(st, s)
     y = (centre + 0.5 * thick * v) * h
-    x = s * w
+    x = (start + (1.0 - start) * s) * w
     lift = np.radians(st["lift_deg"])
     base = np.where(s < 0.12, np.radians(70), np.radians(70) + (lift - np.radians(70))
                     * np.clip((s - 0.12) / 0.2, 0, 1))
@@ -199,11 +223,11 @@ def brow_canvas(length_cm: float, height_cm: float, st: dict, seed: int
         strokes.append((pts, wd, tone[i]))
     cov, ton = _draw(strokes, (w, h))
     # the base: the brow's body filled softly (vellus hairs and hair roots)
-    gs = (np.arange(w) + 0.5) / w
+    gs = ((np.arange(w) + 0.5) / w - start) / (1.0 - start)
     gt = 1.0 - (np.arange(h) + 0.5) / h
     c, th = _brow_shape(st, gs)
     d = np.abs(gt[:, None] - c[None, :]) / np.maximum(th[None, :] / 2, 1e-3)
-    soft = np.clip((1.15 - d) / 0.6, 0, 1) * (1.0 - 0.35 * gs)[None, :] * st["base"]
+    soft = np.clip((1.15 - d) / 0.6, 0, 1) * (_density(gs) * (gs > 0))[None, :] * st["base"]
     total = 1.0 - (1.0 - cov) * (1.0 - soft.astype(np.float32))
     tone_all = (ton * cov + 1.05 * soft * (1 - cov)) / np.maximum(total, 1e-3)
     return total, np.where(total > 1e-3, tone_all, 1.0).astype(np.float32)
@@ -320,7 +344,8 @@ def paint_strokes(piece: Piece, character: Character, kind: str) -> np.ndarray:
         if not sel.any():
             continue
         seed = seed_of(kind, asset, character.name, i)
-        a, tn = (brow_canvas(length, height, st, seed) if kind == "brow"
+        a, tn = (brow_canvas(length, height, st, seed, _brow_start(pos[ids], s))
+                 if kind == "brow"
                  else lash_canvas(length, height, st, lower, seed, span))
         # a texel shows the mean of the hairs it covers (no aliasing on thin UV islands)
         local = np.full(len(pos), -1)
