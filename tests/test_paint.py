@@ -265,6 +265,38 @@ def test_a_lock_of_hair_is_see_through_near_its_tip():
 
 
 @needs_anny
+@pytest.mark.parametrize("preset", ["tomas", "mei"])
+def test_the_hair_flow_map_rebuilds_the_strands_direction_on_the_surface(preset):
+    """The flow map, read as a renderer reads it (the gradients of u and v on each
+    triangle), points where the strands run — out from the style's pole — even on
+    short04's small hairline cards, whose UVs are skewed (a map of directions in texture
+    space drew them as facets of light)."""
+    from mimika.face.makehuman.build import SCALE, Outfit, build
+    from mimika.face.makehuman.character_file import load_character_spec
+    from mimika.face.makehuman.paint.hair import _poles, paint_hair_flow, style
+    from mimika.face.makehuman.paint.surface import face_jacobians
+
+    c = load_character_spec(preset)
+    hair = next(p for p in build(c.phenotype_values(), Outfit(c.hair, None, None, ())).pieces
+                if p.name == "hair")
+    img = paint_hair_flow(hair, c)
+    tris = np.concatenate(list(hair.parts.values()))
+    pos = hair.vertices * SCALE
+    at = rasterize(hair.uvs, tris, img.shape[1::-1])
+    px = img.reshape(-1, 3)[at.texels].astype(float) / 255.0
+    grad = np.linalg.pinv(face_jacobians(pos, hair.uvs, tris))[at.faces_at()]  # ∇u, ∇v
+    t = np.einsum("tji,tj->ti", grad, 2.0 * px[:, :2] - 1.0)
+    want = at.at(pos) - _poles(style(c.hair), pos)[0][0]
+    n = np.cross(*np.moveaxis(face_jacobians(pos, hair.uvs, tris)[at.faces_at()], 2, 0))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    want -= np.einsum("ti,ti->t", want, n)[:, None] * n
+    cos = np.einsum("ti,ti->t", t, want) / np.maximum(
+        np.linalg.norm(t, axis=1) * np.linalg.norm(want, axis=1), 1e-9)
+    carried = px[:, 2] > 0.5
+    assert np.percentile(cos[carried], 1) > 0.99  # as texture-space directions: 0.90
+
+
+@needs_anny
 def test_hair_has_strands_with_soft_transparent_ends(daniel):
     from mimika.face.makehuman.paint.hair import paint_hair
 

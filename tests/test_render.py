@@ -156,3 +156,30 @@ def test_the_portrait_keeps_a_dropped_jaw_in_the_picture_and_a_close_up_is_large
     assert iod[1] / iod[0] == pytest.approx(0.75 / 0.6, rel=0.05)
     with pytest.raises(ParameterError, match="fill"):
         Renderer(head, size=SIZE, fill=1.5)
+
+
+def test_hair_highlights_follow_the_strands_of_a_flow_map():
+    """A hair part's flow map sets the direction its strand highlights run across: strands
+    painted hanging down (the flow pointing down the sheet) shine as hair without a map does
+    (strands along world down), strands combed sideways shine differently — on a head, hair
+    combed back no longer draws light streaks along the edges of its cards."""
+    from mimika.face.head import Head, MeshObject, Part, Texture
+
+    v0, f0, _ = _sheet(10.0, 9)
+    skin = MeshObject("skin", "body", v0, (Part("sclera", f0),), oriented=True)
+    v, f, uv = _sheet(10.2, 9)
+    hair = np.zeros((8, 8, 4), np.uint8)
+    hair[...] = (60, 40, 30, 255)
+    shine = {}
+    for name, ab in (("none", None), ("down", (0.0, -1.0)), ("sideways", (1.0, 0.0))):
+        flow = None if ab is None else np.tile(
+            np.round([127.5 + 127.5 * ab[0], 127.5 + 127.5 * ab[1], 255]).astype(np.uint8),
+            (8, 8, 1))
+        sheet = MeshObject("hair", "face", v, (Part("hair", f, Texture(hair, flow=flow),
+                                                    "blend"),), uvs=uv, oriented=True)
+        head = Head("sheet", (skin, sheet), landmarks=np.arange(68),
+                    anchors={"eye_L": [3.0, 0.0, 10.0], "eye_R": [-3.0, 0.0, 10.0]})
+        with Renderer(head, size=(64, 64), samples=0) as r:
+            shine[name] = r.render().astype(float)[16:48, 16:48].mean(2)
+    assert np.abs(shine["down"] - shine["none"]).mean() < 2.0
+    assert np.abs(shine["sideways"] - shine["none"]).mean() > 10.0

@@ -34,14 +34,16 @@ class Texture:
     (specular scale, 255 = the material's own); for others it is opacity. ``normal``, optional,
     is a detail map at the same UVs: a tangent-space normal (RGB, glTF's convention: +x along
     u, +y along v) and a roughness scale in alpha (0.5 + alpha / 255: 128 is the material's
-    own)."""
+    own). ``flow``, optional, for hair: the strands' root→tip direction in texture space (red,
+    green: 0.5 + 0.5·(u, v)), which the renderer's strand highlights follow."""
 
     image: np.ndarray
     name: str = ""
     normal: np.ndarray | None = None
+    flow: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for which in ("image", "normal"):
+        for which in ("image", "normal", "flow"):
             img = getattr(self, which)
             if img is None:
                 continue

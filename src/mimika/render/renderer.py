@@ -219,14 +219,16 @@ class _GpuObject:
         self.groups: dict[int, int] = {}
         textured = obj.uvs is not None and any(p.texture is not None for p in obj.parts)
         self.textures: list[Any] = []
-        #: detail maps (normal, roughness; :class:`~mimika.face.head.Texture`) by first index
+        #: detail maps by first index (normal and roughness, or hair's strand flow:
+        #: :class:`~mimika.face.head.Texture`)
         self.details: dict[int, Any] = {}
         texs, details = [], []
         for p in obj.parts:
             texs.append(_upload_texture(ctx, p.texture.image)
                         if textured and p.texture is not None else None)
-            details.append(_upload_texture(ctx, p.texture.normal)
-                           if texs[-1] is not None and p.texture.normal is not None else None)
+            second = None if texs[-1] is None else (
+                p.texture.normal if p.texture.normal is not None else p.texture.flow)
+            details.append(None if second is None else _upload_texture(ctx, second))
             self.textures += [t for t in (texs[-1], details[-1]) if t is not None]
         first = 0
         for i, f, groups in ranges:
@@ -774,14 +776,15 @@ class Renderer:
         """The mesh program variant: ``textured``, the shading ``model`` (a material's:
         :data:`MODEL_DEFINES`), ``depth_only`` (texture coverage only, for a depth pre-pass),
         ``groups`` (the skin's appearance changes: the wrinkle groups compiled in, 0 for none),
-        ``detail`` (a normal and roughness map), ``skin`` (a skin-like material: soft shadows
-        widen with distance on it); compiled on first use with the lights set."""
+        ``detail`` (a normal and roughness map; hair: its strand flow), ``skin`` (a skin-like
+        material: soft shadows widen with distance on it); compiled on first use with the
+        lights set."""
         shading = (MODEL_DEFINES[model],) if model in MODEL_DEFINES else ()
         shadows = self._shadows and not depth_only
         key = (("TEXTURED",) * textured + shading + ("DEPTH_ONLY",) * depth_only
                + ("SHADOWS",) * shadows + ("SOFT_SHADOWS",) * (shadows and skin and self._soft)
                + ("WRINKLES", f"WR_GROUPS {groups}") * bool(groups and not depth_only)
-               + ("DETAIL",) * (detail and not depth_only))
+               + (("FLOW",) if model == "hair" else ("DETAIL",)) * (detail and not depth_only))
         progs = gl["progs"]
         if key not in progs:
             ctx = gl["ctx"]

@@ -11,7 +11,7 @@
 // of cut-out parts (coverage only; they are then shaded once where the pre-pass left them),
 // SHADOWS for the key light's shadow map, EYE, IRIS and CORNEA for the eye (eye.glsl: the wet
 // reflection of the studio, the lids' shade, the iris under the cornea), DETAIL for a normal
-// and roughness map (detail.glsl).
+// and roughness map (detail.glsl), FLOW for hair's strand directions (flow.glsl).
 in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -23,8 +23,14 @@ in vec4 v_shadow;
 #ifdef WRINKLES
 #include "wrinkles.glsl"
 #endif
+#if defined(DETAIL) || defined(FLOW)
+#include "frame.glsl"
+#endif
 #ifdef DETAIL
 #include "detail.glsl"
+#endif
+#ifdef FLOW
+#include "flow.glsl"
 #endif
 
 uniform vec3 u_base;        // linear base colour
@@ -69,8 +75,8 @@ float specular(vec3 n, vec3 v, vec3 l) {
     return u_specular * norm * fres * pow(max(dot(n, h), 1e-4), shininess) * ndl;
 }
 
-// Hair (Kajiya-Kay): strands run along the surface's projection of world up (root to tip
-// downward); two highlights — a white one shifted toward the root and a broader one tinted
+// Hair (Kajiya-Kay): strands run as the flow map says (FLOW), else along the surface's
+// projection of world up (root to tip downward); two highlights — a white one shifted toward the root and a broader one tinted
 // by the hair colour toward the tip. ``t`` is not normalised: short where strands are ill
 // defined (the crown), where the standard highlight takes over.
 float strand_spec(vec3 t, vec3 n, vec3 h, float shift, float e) {
@@ -145,8 +151,12 @@ void main() {
     shininess = u_shininess / (rough * rough);
 #endif
 #ifdef HAIR
+#ifdef FLOW
+    vec3 t = strand_direction(n, v_pos, v_uv);
+#else
     vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);
     vec3 t = up - dot(up, n) * n;
+#endif
     float defined = smoothstep(0.15, 0.5, length(t));
     vec3 sk = vec3(0.0), sf = vec3(0.0);
     if (defined < 1.0) {  // the crown, where strands converge: the standard highlight

@@ -16,6 +16,7 @@ in vec4 v_shadow;
 #include "wrinkles.glsl"
 #endif
 #ifdef DETAIL
+#include "frame.glsl"
 #include "detail.glsl"
 #endif
 

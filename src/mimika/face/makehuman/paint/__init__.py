@@ -69,11 +69,15 @@ def _part_texture(mat: str, piece: Piece, ch: Character) -> tuple[Texture | None
         return _texture("sclera", piece, {"seed": seed, "nasal": nasal},
                         lambda: paint_sclera(seed, nasal)), "opaque"
     if mat == "hair":
-        from mimika.face.makehuman.paint.hair import paint_hair
+        from mimika.face.makehuman.paint.hair import paint_hair, paint_hair_flow, style
 
-        return _texture("hair", piece, {"name": ch.name, "hair": ch.hair,
-                                        "color": ch.hair_color},
-                        lambda: paint_hair(piece, ch)), "blend"
+        who = {"name": ch.name, "hair": ch.hair, "color": ch.hair_color}
+        tex = _texture("hair", piece, who, lambda: paint_hair(piece, ch))
+        if style(ch.hair or "").get("curl", 0) <= 0:  # coils have no one direction
+            flow = _texture("hair_flow", piece, {"hair": ch.hair},
+                            lambda: paint_hair_flow(piece, ch))
+            tex = replace(tex, flow=flow.image)
+        return tex, "blend"
     if mat in ("brow", "lash"):
         from mimika.face.makehuman.paint.strokes import paint_strokes
 

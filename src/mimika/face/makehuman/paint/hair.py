@@ -163,6 +163,36 @@ def _poles(st: dict, pos: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, floa
     return out
 
 
+def paint_hair_flow(piece: Piece, character: Character) -> np.ndarray:
+    """RGB flow map of the hair piece for the renderer's strand highlights: per texel the
+    strands' root→tip direction — away from the style's pole, straight down below a tail's
+    band — as (a, b) in red and green (0.5 + 0.5·, unit), the direction on the surface being
+    a·∇u + b·∇v (the frame a renderer rebuilds from the UVs' screen derivatives, as for
+    normal maps); in blue how well the surface carries it (1: along the surface)."""
+    st = style(character.hair or "")
+    size = int(st["size"]) // 2
+    uv = piece.uvs
+    tris = np.concatenate(list(piece.parts.values()))
+    pos = piece.vertices.astype(np.float64) * CM
+    at = rasterize(uv, tris, (size, size))
+    p = at.at(pos)
+    poles = _poles(st, pos)
+    flow = p - poles[0][0]
+    for *_, below in poles[1:]:
+        flow[p[:, 1] < below] = [0.0, -1.0, 0.0]
+    flow /= np.maximum(np.linalg.norm(flow, axis=1, keepdims=True), 1e-12)
+    jac = face_jacobians(pos, uv, tris)[at.faces_at()]  # (T, 3, 2): ∂p/∂u, ∂p/∂v
+    ab = np.einsum("tij,ti->tj", jac, flow)  # (∇u, ∇v)ᵀ (a, b) = the flow in the plane
+    ab /= np.maximum(np.linalg.norm(ab, axis=1, keepdims=True), 1e-12)
+    # where the way out from the pole pierces a triangle (crumpled cards), its shadow in the
+    # triangle's plane is short and its direction there is noise
+    n = np.cross(jac[:, :, 0], jac[:, :, 1])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    carried = np.sqrt(np.clip(1.0 - np.einsum("ti,ti->t", flow, n) ** 2, 0.0, 1.0))
+    rgb = np.column_stack([0.5 + 0.5 * ab, carried])
+    return at.image(np.round(rgb * 255).astype(np.uint8))
+
+
 def _across(at: Atlas, p: np.ndarray, pos, uv, tris, jac, tsz, st: dict, poles
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per texel: the across-strand coordinate (cm; on shells measured 10 cm from the pole),
