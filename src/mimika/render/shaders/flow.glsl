@@ -5,7 +5,8 @@
 uniform sampler2D u_detail;
 
 // The strands' direction at the pixel, tip to root, in the surface: unit where the surface
-// carries it, shorter where it does not (strand highlights give way to a plain one there).
+// carries it, shorter where it does not or where the triangle stands across the smoothed
+// normal (strand highlights give way to a plain one there).
 vec3 strand_direction(vec3 n, vec3 p, vec2 uv) {
     vec3 f = texture(u_detail, uv).rgb;
     vec2 d = f.rg * 2.0 - 1.0;
@@ -15,6 +16,7 @@ vec3 strand_direction(vec3 n, vec3 p, vec2 uv) {
     vec3 gu, gv;
     uv_frame(nf * sign(dot(nf, n)), p, uv, gu, gv);
     vec3 t = -(d.x * gu + d.y * gv);
-    t -= dot(t, n) * n;
-    return t * inversesqrt(max(dot(t, t), 1e-12)) * f.b;
+    t *= inversesqrt(max(dot(t, t), 1e-12));
+    // in the plane of the smooth normal: short where the triangle stands across it
+    return (t - dot(t, n) * n) * f.b;
 }

@@ -151,11 +151,14 @@ void main() {
     shininess = u_shininess / (rough * rough);
 #endif
 #ifdef HAIR
-#ifdef FLOW
-    vec3 t = strand_direction(n, v_pos, v_uv);
-#else
     vec3 up = mat3(u_view) * vec3(0.0, 1.0, 0.0);
     vec3 t = up - dot(up, n) * n;
+#ifdef FLOW
+    {   // where the flow map's direction is unsure, world up as without one (not the plain
+        // highlight: its glints lit single triangles of daniel's fringe)
+        vec3 f = strand_direction(n, v_pos, v_uv);
+        t = mix(t, f, smoothstep(0.3, 0.7, length(f)));
+    }
 #endif
     float defined = smoothstep(0.15, 0.5, length(t));
     vec3 sk = vec3(0.0), sf = vec3(0.0);

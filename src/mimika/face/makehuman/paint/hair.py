@@ -360,7 +360,10 @@ def _grey_strands(c: np.ndarray, base: np.ndarray, across: np.ndarray, along: np
                                                            + 997.0 * r))
     white = (r < share) * smoothstep(0.35, 0.15, np.abs(f - 0.5)) * shows
     lum = float(color.luminance(base))
-    light = np.full(3, min(1.25 * lum, 0.5), np.float32)
+    # white hair is faintly yellow (keratin) and takes a little of its neighbours' colour;
+    # neutral grey read as light-blue dashes under the studio's sky-blue ambient
+    tint = 0.5 + 0.5 * base / max(lum, 1e-6)
+    light = (min(1.25 * lum, 0.5) * tint / float(color.luminance(tint))).astype(np.float32)
     k = float(white.mean())
     dark = np.maximum(base - k * light, 0.2 * base) / (1 - k)
     mixed = dark[None, :] * (1 - white[:, None]) + light[None, :] * white[:, None]
