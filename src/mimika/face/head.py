@@ -34,8 +34,9 @@ class Texture:
     (specular scale, 255 = the material's own); for others it is opacity. ``normal``, optional,
     is a detail map at the same UVs: a tangent-space normal (RGB, glTF's convention: +x along
     u, +y along v) and a roughness scale in alpha (0.5 + alpha / 255: 128 is the material's
-    own). ``flow``, optional, for hair: the strands' root→tip direction in texture space (red,
-    green: 0.5 + 0.5·(u, v)), which the renderer's strand highlights follow."""
+    own). ``flow``, optional, for hair: the strands' root→tip direction, which the renderer's
+    strand highlights follow — red, green: 0.5 + 0.5·(a, b), the direction a·∇u + b·∇v on the
+    surface; blue: how well the surface carries it (1: fully)."""
 
     image: np.ndarray
     name: str = ""

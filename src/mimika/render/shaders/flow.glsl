@@ -6,7 +6,7 @@ uniform sampler2D u_detail;
 
 // The strands' direction at the pixel, tip to root, in the surface: unit where the surface
 // carries it, shorter where it does not or where the triangle stands across the smoothed
-// normal (strand highlights give way to a plain one there).
+// normal (the shader falls back to world up there).
 vec3 strand_direction(vec3 n, vec3 p, vec2 uv) {
     vec3 f = texture(u_detail, uv).rgb;
     vec2 d = f.rg * 2.0 - 1.0;

@@ -76,9 +76,10 @@ float specular(vec3 n, vec3 v, vec3 l) {
 }
 
 // Hair (Kajiya-Kay): strands run as the flow map says (FLOW), else along the surface's
-// projection of world up (root to tip downward); two highlights — a white one shifted toward the root and a broader one tinted
-// by the hair colour toward the tip. ``t`` is not normalised: short where strands are ill
-// defined (the crown), where the standard highlight takes over.
+// projection of world up (root to tip downward); two highlights — a white one shifted toward
+// the root and a broader one tinted by the hair colour toward the tip. ``t`` is not
+// normalised: short where strands are ill defined (the crown), where the standard highlight
+// takes over.
 float strand_spec(vec3 t, vec3 n, vec3 h, float shift, float e) {
     vec3 ts = normalize(t + shift * n);
     float th = dot(ts, h);
