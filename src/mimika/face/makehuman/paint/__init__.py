@@ -69,11 +69,11 @@ def _part_texture(mat: str, piece: Piece, ch: Character) -> tuple[Texture | None
         return _texture("sclera", piece, {"seed": seed, "nasal": nasal},
                         lambda: paint_sclera(seed, nasal)), "opaque"
     if mat == "hair":
-        from mimika.face.makehuman.paint.hair import paint_hair, paint_hair_flow, style
+        from mimika.face.makehuman.paint.hair import is_coily, paint_hair, paint_hair_flow
 
         who = {"name": ch.name, "hair": ch.hair, "color": ch.hair_color}
         tex = _texture("hair", piece, who, lambda: paint_hair(piece, ch))
-        if style(ch.hair or "").get("curl", 0) <= 0:  # coils have no one direction
+        if not is_coily(ch.hair):
             flow = _texture("hair_flow", piece, {"hair": ch.hair},
                             lambda: paint_hair_flow(piece, ch))
             tex = replace(tex, flow=flow.image)
@@ -115,8 +115,8 @@ def parts_of(piece: Piece, character: Character) -> tuple[Part, ...]:
             (None, "opaque")
         name = MATERIALS.get(mat, mat) if tex is not None else mat
         if mat == "hair" and tex is not None:
-            from mimika.face.makehuman.paint.hair import style
+            from mimika.face.makehuman.paint.hair import is_coily
 
-            name = "hair_coily" if style(character.hair or "").get("curl", 0) > 0 else "hair"
+            name = "hair_coily" if is_coily(character.hair) else "hair"
         out.append(Part(name, faces, tex, mode))
     return tuple(out)

@@ -46,6 +46,11 @@ def style(name: str) -> dict:
     return styles().get(name, styles()["short02"])
 
 
+def is_coily(name: str | None) -> bool:
+    """Whether hair style ``name`` is coily (drawn as coils, without one strand direction)."""
+    return style(name or "").get("curl", 0) > 0
+
+
 class _Table:
     """A periodic 1-D random table read with linear interpolation."""
 
@@ -163,6 +168,15 @@ def _poles(st: dict, pos: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, floa
     return out
 
 
+def _strand_way(p: np.ndarray, poles: list) -> np.ndarray:
+    """The strands' root→tip direction at points ``p`` (cm; not unit): away from the first
+    pole, straight down below a tail's band."""
+    way = p - poles[0][0]
+    for *_, below in poles[1:]:
+        way[p[:, 1] < below] = [0.0, -1.0, 0.0]
+    return way
+
+
 def paint_hair_flow(piece: Piece, character: Character) -> np.ndarray:
     """RGB flow map of the hair piece for the renderer's strand highlights: per texel the
     strands' root→tip direction — away from the style's pole, straight down below a tail's
@@ -176,10 +190,7 @@ def paint_hair_flow(piece: Piece, character: Character) -> np.ndarray:
     pos = piece.vertices.astype(np.float64) * CM
     at = rasterize(uv, tris, (size, size))
     p = at.at(pos)
-    poles = _poles(st, pos)
-    flow = p - poles[0][0]
-    for *_, below in poles[1:]:
-        flow[p[:, 1] < below] = [0.0, -1.0, 0.0]
+    flow = _strand_way(p, _poles(st, pos))
     flow /= np.maximum(np.linalg.norm(flow, axis=1, keepdims=True), 1e-12)
     jac = face_jacobians(pos, uv, tris)[at.faces_at()]  # (T, 3, 2): ∂p/∂u, ∂p/∂v
     ab = np.einsum("tij,ti->tj", jac, flow)  # (∇u, ∇v)ᵀ (a, b) = the flow in the plane
@@ -217,10 +228,7 @@ def _across(at: Atlas, p: np.ndarray, pos, uv, tris, jac, tsz, st: dict, poles
     w = area3 * uvarea  # twice the triangle's area, cm²
     card = (np.bincount(lab, 0.5 * w, lab.max() + 1)[lab] < CARD_CM2)[fid]
     if card.any():
-        cen = pos[tris].mean(1)
-        flow3 = cen - poles[0][0]
-        for *_, below in poles[1:]:
-            flow3[cen[:, 1] < below] = [0.0, -1.0, 0.0]
+        flow3 = _strand_way(pos[tris].mean(1), poles)
         flow_uv = np.einsum("fji,fi->fj", np.linalg.pinv(jac), flow3)  # (F, 2)
         flow_uv /= np.maximum(np.linalg.norm(flow_uv, axis=1, keepdims=True), 1e-12)
         mean = np.stack([np.bincount(lab, w * flow_uv[:, k]) for k in (0, 1)], 1)
