@@ -217,3 +217,47 @@ def test_lengthened_incisors_keep_square_biting_corners():
     t1 = next(p for p in seat_teeth(built).pieces if p.name == "teeth")
     assert np.ptp(t1.vertices[:, 1]) > np.ptp(t0.vertices[:, 1])  # the crowns did grow
     np.testing.assert_allclose(after, before, rtol=0.1)
+
+
+def _opening(name: str, view: str, aus: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Luma of a render of ``name`` (480 × 480) and the mask of its lip opening (60-67)."""
+    from PIL import Image, ImageDraw
+
+    from mimika.face.heads import load_head
+    from mimika.render import Renderer
+
+    head, rig = load_head(name)
+    size = (480, 480)
+    pos = rig.deform(aus)
+    with Renderer(rig.head, size=size) as r:
+        img = r.render(pos, view=view, aus=aus).astype(float).mean(2)
+        cam = r.camera(view)
+    px = np.round(cam.project(head.landmark_points(pos)[60:68].astype(float), size))
+    mask = Image.new("L", size, 0)
+    ImageDraw.Draw(mask).polygon([tuple(p) for p in px.astype(int)], fill=1)
+    return img, np.asarray(mask, bool)
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("name", ["amara", "mei"])
+def test_a_dropped_jaw_shows_the_dark_of_the_mouth_above_the_tongue(name):
+    """Seen from the front, the upper half of an open mouth (AU26) is the dark of the mouth
+    and the lower half the tongue behind the lower teeth, as in a photograph. MakeHuman's
+    jawOpen left the tongue's back at the palate: a wall of tongue filled the opening (upper
+    half 0.5-0.7 of the lower's luma)."""
+    img, mouth = _opening(name, "front", {"AU26": 1.0})
+    rows = np.nonzero(mouth)[0]
+    upper = mouth & (np.arange(mouth.shape[0])[:, None] < np.median(rows))
+    assert mouth.sum() > 800
+    assert img[upper].mean() < 0.45 * img[mouth & ~upper].mean()
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("name", ["amara", "mei"])
+def test_the_inside_of_the_cheek_is_shaded_not_black(name):
+    """Seen from three-quarter, an open mouth shows the inside of the near cheek beside the
+    molars: mucosa in the light that comes through the opening. Outside the bounds the
+    renderer drew around the lip contour it was unlit — 13-26 % of the opening pure black."""
+    img, mouth = _opening(name, "three-quarter", {"AU26": 1.0})
+    assert mouth.sum() > 800
+    assert (img[mouth] < 6).mean() < 0.05

@@ -10,8 +10,11 @@ point lies outside it sideways (the inside of the cheeks, the teeth behind the l
 
 Inside = the teeth and tongue (category ``teeth``), and the skin or cavity meshes lying behind
 the inner-lip contour between the mouth corners (for the characters, whose mouth is part of
-the body mesh, and ICT's mouth socket). Skin inside the mouth takes the colour of the oral
-mucosa in the shaders.
+the body mesh, and ICT's mouth socket) — or, where a head's maker marks its mouth's lining
+(``head.meta["mouth_lining"]``, 0 … 1 per vertex of its landmark object), that lining: the
+characters' cheeks, palate and floor of the mouth reach past those bounds, and seen from
+three-quarter the inside of the near cheek stood unlit, black beside the molars. Skin inside
+the mouth takes the colour of the oral mucosa in the shaders.
 """
 
 from __future__ import annotations
@@ -65,6 +68,8 @@ class MouthCavity:
                      * (1.0 - smoothstep(0.8 * half, 1.05 * half, np.abs(v[:, 0] - centre[0])))
                      * (1.0 - smoothstep(0.45 * half, 0.75 * half,
                                           np.abs(v[:, 1] - centre[1]))))
+            if o.name == head.landmark_object and "mouth_lining" in head.meta:
+                w = np.asarray(head.meta["mouth_lining"], np.float64)  # its maker knows
             ids = np.flatnonzero(w > 1e-3)
             if len(ids):
                 self.ids[o.name] = ids

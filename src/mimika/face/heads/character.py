@@ -22,8 +22,10 @@ from mimika.face.makehuman import cache
 from mimika.face.makehuman.base import first_copies, landmark_ids
 from mimika.face.makehuman.build import EYE_MID, SCALE, Built, Outfit, build
 from mimika.face.makehuman.character_file import Character, load_character_spec
+from mimika.face.makehuman.jaw import tongue_follows_jaw
 from mimika.face.makehuman.lips import lower_lip_follows_jaw, seal_lips
 from mimika.face.makehuman.paint import parts_of
+from mimika.face.makehuman.paint.regions import mouth_lining
 from mimika.face.makehuman.skeleton import rest_pose, skin
 from mimika.face.makehuman.teeth import seat_teeth
 from mimika.face.rigs.blendshape import ShapeSet, load_table
@@ -121,7 +123,8 @@ def assemble(built: Built, character: Character, parts_of=None,
         "jaw_pivot": heads_cm[sk.index("head")],
     }
     meta = {"character": character.name, "phenotype": dict(character.phenotype),
-            "outfit": character.outfit_dict()}
+            "outfit": character.outfit_dict(),
+            "mouth_lining": mouth_lining(skin_piece.meta.get("uv_layout", skin_piece.uvs))}
     desc = character.description or f"MakeHuman character {character.name!r}"
     head = Head(character.name, tuple(posed_objs), lm, a, description=desc, meta=meta)
     bind_head = Head(character.name, tuple(bind_objs), lm, a, description=desc, meta=meta)
@@ -201,7 +204,7 @@ def built_character(character: Character) -> Built:
             cache.save(path, built)
         except OSError as e:
             log.warning("cannot cache character %r in %s: %s", character.name, path, e)
-    return seal_lips(lower_lip_follows_jaw(seat_teeth(built)))
+    return seal_lips(lower_lip_follows_jaw(tongue_follows_jaw(seat_teeth(built))))
 
 
 _LOADED: dict[str, tuple[Head, SkinnedRig]] = {}

@@ -52,3 +52,9 @@ def skin_regions(uv: np.ndarray, tris: np.ndarray) -> np.ndarray:
     lips = sample(uv_mask("lips"), centre) > 0.5
     out[lips & (out == 0)] = 1
     return out
+
+
+def mouth_lining(uv: np.ndarray) -> np.ndarray:
+    """Per vertex of the hm08 skin at its original ``uv``: how much it lies on the lining of
+    the mouth (MPFB2's inside-mouth mask: lips' inner side, cheeks, palate, floor), 0 … 1."""
+    return sample(uv_mask("inside-mouth"), uv, bilinear=True)
