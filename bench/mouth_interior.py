@@ -25,7 +25,6 @@ SIZE = (480, 480)
 
 def measure(name: str, au: str) -> dict[str, float]:
     """The measures of ``name`` with ``au`` at 1.0 (see the module's docstring)."""
-    from PIL import Image, ImageDraw
     from scipy import ndimage
 
     from mimika.face.heads import load_head
@@ -42,10 +41,7 @@ def measure(name: str, au: str) -> dict[str, float]:
         with Renderer(rig.head, size=SIZE) as r:
             luma = r.render(pos, view=view, aus=aus).astype(float).mean(2)
             cam = r.camera(view)
-        px = np.round(cam.project(head.landmark_points(pos)[60:68].astype(float), SIZE))
-        mask = Image.new("L", SIZE, 0)
-        ImageDraw.Draw(mask).polygon([tuple(p) for p in px.astype(int)], fill=1)
-        mouth = np.asarray(mask, bool)
+        mouth = cam.outline_mask(head.landmark_points(pos)[60:68], SIZE)
         if view == "front":
             rows = np.nonzero(mouth)[0]
             upper = mouth & (np.arange(SIZE[1])[:, None] < np.median(rows))

@@ -27,21 +27,13 @@ def _luma(img, xy, r=2):
     return float(img[y - r:y + r + 1, x - r:x + r + 1].mean())
 
 
-def _polygon(cam, points) -> np.ndarray:
-    from PIL import Image, ImageDraw
-
-    mask = Image.new("L", SIZE, 0)
-    ImageDraw.Draw(mask).polygon([tuple(p) for p in _pixels(cam, points)], fill=1)
-    return np.asarray(mask, bool)
-
-
 def test_an_open_mouth_is_darker_inside_than_its_lips(any_rig):
     aus = {"AU25": 1.0, "AU26": 1.0}
     teeth = tuple(o.name for o in any_rig.head.objects if "teeth" in o.name)
     img, cam = _render(any_rig, aus, hidden=teeth)  # the cavity, tongue and gums
     lm = any_rig.head.landmark_points(any_rig.deform(aus))
-    opening = _polygon(cam, lm[60:68])
-    lips = _polygon(cam, lm[48:60]) & ~_polygon(cam, lm[[48, *range(60, 68), 54]])
+    opening = cam.outline_mask(lm[60:68], SIZE)
+    lips = cam.outline_mask(lm[48:60], SIZE) & ~cam.outline_mask(lm[[48, *range(60, 68), 54]], SIZE)
     y = img.mean(2)
     assert opening.sum() > 200 and lips.sum() > 200
     assert y[opening].mean() < 0.85 * y[lips].mean()

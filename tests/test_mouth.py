@@ -221,8 +221,6 @@ def test_lengthened_incisors_keep_square_biting_corners():
 
 def _opening(name: str, view: str, aus: dict) -> tuple[np.ndarray, np.ndarray]:
     """Luma of a render of ``name`` (480 × 480) and the mask of its lip opening (60-67)."""
-    from PIL import Image, ImageDraw
-
     from mimika.face.heads import load_head
     from mimika.render import Renderer
 
@@ -232,10 +230,7 @@ def _opening(name: str, view: str, aus: dict) -> tuple[np.ndarray, np.ndarray]:
     with Renderer(rig.head, size=size) as r:
         img = r.render(pos, view=view, aus=aus).astype(float).mean(2)
         cam = r.camera(view)
-    px = np.round(cam.project(head.landmark_points(pos)[60:68].astype(float), size))
-    mask = Image.new("L", size, 0)
-    ImageDraw.Draw(mask).polygon([tuple(p) for p in px.astype(int)], fill=1)
-    return img, np.asarray(mask, bool)
+    return img, cam.outline_mask(head.landmark_points(pos)[60:68], size)
 
 
 @pytest.mark.render

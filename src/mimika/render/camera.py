@@ -102,6 +102,16 @@ class Camera:
         w, h = size
         return np.c_[(ndc[:, 0] + 1.0) * 0.5 * w, (1.0 - ndc[:, 1]) * 0.5 * h]
 
+    def outline_mask(self, points: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+        """(H, W) bool: the pixels inside the polygon world ``points`` (N, 3, in order, e.g.
+        the inner-lip landmarks 60–67: the mouth's opening) project to."""
+        from PIL import Image, ImageDraw
+
+        mask = Image.new("L", size, 0)
+        px = np.round(self.project(points, size)).astype(int)
+        ImageDraw.Draw(mask).polygon([tuple(p) for p in px], fill=1)
+        return np.asarray(mask, bool)
+
 
 def face_frame(head: Head, positions: Mapping[str, np.ndarray] | None = None):
     """Face centre (3,), face height and face width in cm, from the 68 landmarks.
