@@ -61,6 +61,8 @@ class MouthCavity:
             v = o.vertices.astype(np.float64)
             if o.category == "teeth":
                 w = np.ones(len(v))
+            elif o.name == head.landmark_object and "mouth_lining" in head.meta:
+                w = np.asarray(head.meta["mouth_lining"], np.float64)  # its maker knows
             else:
                 zc = np.interp(v[:, 0], contour[order, 0], contour[order, 2])
                 depth = zc - v[:, 2]  # behind the inner-lip contour, cm (the throat ≈ 6)
@@ -68,8 +70,6 @@ class MouthCavity:
                      * (1.0 - smoothstep(0.8 * half, 1.05 * half, np.abs(v[:, 0] - centre[0])))
                      * (1.0 - smoothstep(0.45 * half, 0.75 * half,
                                           np.abs(v[:, 1] - centre[1]))))
-            if o.name == head.landmark_object and "mouth_lining" in head.meta:
-                w = np.asarray(head.meta["mouth_lining"], np.float64)  # its maker knows
             ids = np.flatnonzero(w > 1e-3)
             if len(ids):
                 self.ids[o.name] = ids
