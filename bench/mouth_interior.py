@@ -36,22 +36,22 @@ def measure(name: str, au: str) -> dict[str, float]:
     pos = rig.deform(aus)
     objs = list(rig.head.objects)
     inner = [k for k, o in enumerate(objs) if o.category == "teeth"]
+    meshes = [(pos[o.name], o.faces) for o in objs]
     out = {}
-    for view in ("front", "three-quarter"):
-        with Renderer(rig.head, size=SIZE) as r:
+    with Renderer(rig.head, size=SIZE) as r:
+        for view in ("front", "three-quarter"):
             luma = r.render(pos, view=view, aus=aus).astype(float).mean(2)
             cam = r.camera(view)
-        mouth = cam.outline_mask(head.landmark_points(pos)[60:68], SIZE)
-        if view == "front":
-            rows = np.nonzero(mouth)[0]
-            upper = mouth & (np.arange(SIZE[1])[:, None] < np.median(rows))
-            out["upper/lower"] = luma[upper].mean() / max(luma[mouth & ~upper].mean(), 1e-6)
-        else:
-            out["black ¾"] = float((luma[mouth] < 6).mean())
-        meshes = [(pos[o.name], np.concatenate([p.faces for p in o.parts])) for o in objs]
-        top = id_layers(meshes, cam, SIZE)[0].obj
-        near = ndimage.binary_dilation(mouth, iterations=3)
-        out[f"through skin {view[0]}"] = int((np.isin(top, inner) & ~near).sum())
+            mouth = cam.outline_mask(head.landmark_points(pos)[60:68], SIZE)
+            if view == "front":
+                rows = np.nonzero(mouth)[0]
+                upper = mouth & (np.arange(SIZE[1])[:, None] < np.median(rows))
+                out["upper/lower"] = luma[upper].mean() / max(luma[mouth & ~upper].mean(), 1e-6)
+            else:
+                out["black ¾"] = float((luma[mouth] < 6).mean())
+            top = id_layers(meshes, cam, SIZE)[0].obj
+            near = ndimage.binary_dilation(mouth, iterations=3)
+            out[f"through skin {view[0]}"] = int((np.isin(top, inner) & ~near).sum())
     return out
 
 
